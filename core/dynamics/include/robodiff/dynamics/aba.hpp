@@ -1,0 +1,67 @@
+// Articulated Body Algorithm: forward dynamics ddq = ABA(q, v, tau), in O(n), with
+// articulated inertias in the joint frames (Featherstone, as in Pinocchio).
+#pragma once
+
+#include <vector>
+
+#include "robodiff/dynamics/data.hpp"
+#include "robodiff/dynamics/joint.hpp"
+#include "robodiff/dynamics/rnea.hpp"
+#include "robodiff/dynamics/spd_inverse.hpp"
+
+namespace robodiff {
+
+template <class S, class Q, class V, class T>
+const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
+                   const Eigen::MatrixBase<T>& tau, const std::vector<Force<S>>* fext = nullptr) {
+  const int n = model.njoints();
+  // Pass 1, root to leaves: kinematics, bias accelerations and forces.
+  for (int j = 0; j < n; ++j) {
+    const Joint& joint = model.joints[j];
+    const int p = joint.parent;
+    data.liMi[j] = jointPlacement<S>(joint, q);
+    Motion<S> vj = jointMotion<S>(joint, v);
+    if (p >= 0) {
+      data.oMi[j] = data.oMi[p] * data.liMi[j];
+      data.v[j] = data.liMi[j].actInv(data.v[p]) + vj;
+    } else {
+      data.oMi[j] = data.liMi[j];
+      data.v[j] = vj;
+    }
+    data.c[j] = data.v[j].cross(vj);
+    const auto& I = asScalar<S>(model.bodies[j]);
+    data.Ia[j] = I.matrix();
+    data.pA[j] = data.v[j].cross(I * data.v[j]);
+    if (fext) data.pA[j] -= (*fext)[j];
+  }
+  // Pass 2, leaves to root: articulated inertias and bias forces.
+  for (int j = n - 1; j >= 0; --j) {
+    const Joint& joint = model.joints[j];
+    data.U[j] = rightMultiplySubspace(joint, data.Ia[j]);
+    JointSquare<S> D(joint.nv, joint.nv);
+    for (int k = 0; k < joint.nv; ++k) D.row(k) = projectVector<S>(joint, data.U[j].col(k)).transpose();
+    data.Dinv[j] = inverseSymmetricPositiveDefinite<S>(D);
+    JointVector<S> pAproj = projectVector<S>(joint, data.pA[j].toVector());
+    for (int k = 0; k < joint.nv; ++k) data.u[j][k] = tau[joint.idx_v + k] - pAproj[k];
+    if (joint.parent >= 0) {
+      JointBlock<S> UDinv = data.U[j] * data.Dinv[j];
+      Mat6<S> Ia = data.Ia[j] - UDinv * data.U[j].transpose();
+      Vec6<S> pa = data.pA[j].toVector() + Ia * data.c[j].toVector() + UDinv * data.u[j];
+      data.Ia[joint.parent] += data.liMi[j].actOnSymmetric(Ia);
+      data.pA[joint.parent] += data.liMi[j].act(Force<S>::fromVector(pa));
+    }
+  }
+  // Pass 3, root to leaves: accelerations.
+  const Motion<S> a0 = gravityAcceleration<S>(model);
+  for (int j = 0; j < n; ++j) {
+    const Joint& joint = model.joints[j];
+    const int p = joint.parent;
+    data.a[j] = data.liMi[j].actInv(p >= 0 ? data.a[p] : a0) + data.c[j];
+    JointVector<S> qdd = data.Dinv[j] * (data.u[j] - data.U[j].transpose() * data.a[j].toVector());
+    for (int k = 0; k < joint.nv; ++k) data.ddq[joint.idx_v + k] = qdd[k];
+    data.a[j] += jointMotion<S>(joint, data.ddq);
+  }
+  return data.ddq;
+}
+
+}  // namespace robodiff

@@ -1,0 +1,76 @@
+// Workspace of the dynamics algorithms for one model and one scalar type. Everything is
+// sized at construction, so the algorithms never allocate (for double).
+#pragma once
+
+#include <vector>
+
+#include "robodiff/model/model.hpp"
+#include "robodiff/spatial/force.hpp"
+#include "robodiff/spatial/motion.hpp"
+#include "robodiff/spatial/se3.hpp"
+
+namespace robodiff {
+
+// A joint's 6 x nv block (motion subspace, U of ABA); at most 6 columns, no heap.
+template <class S> using JointBlock = Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, 6>;
+template <class S> using JointSquare = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+template <class S> using JointVector = Eigen::Matrix<S, Eigen::Dynamic, 1, 0, 6, 1>;
+
+// Inertia in its linear parametrisation [m 1, -h^; h^, I_o] (h = m c, I_o about the
+// frame origin): sums of bodies in one frame are plain sums of these.
+template <class S> struct InertiaSum {
+  S mass = S(0);
+  Vec3<S> h = Vec3<S>::Zero();
+  Mat3<S> rotational = Mat3<S>::Zero();
+
+  InertiaSum& operator+=(const InertiaSum& o) {
+    mass += o.mass;
+    h += o.h;
+    rotational += o.rotational;
+    return *this;
+  }
+  Force<S> operator*(const Motion<S>& v) const {
+    return {mass * v.linear - h.cross(v.angular), h.cross(v.linear) + rotational * v.angular};
+  }
+};
+
+template <class S> struct Data {
+  explicit Data(const Model& model)
+      : liMi(model.njoints()), oMi(model.njoints()), oMf(model.nframes()),
+        v(model.njoints()), a(model.njoints()), c(model.njoints()), f(model.njoints()),
+        tau(VecX<S>::Zero(model.nv)), ddq(VecX<S>::Zero(model.nv)),
+        M(MatX<S>::Zero(model.nv, model.nv)), J(Matrix6X<S>::Zero(6, model.nv)),
+        oYcrb(model.njoints()), Ia(model.njoints()), pA(model.njoints()),
+        U(model.njoints()), Dinv(model.njoints()), u(model.njoints()) {
+    for (int j = 0; j < model.njoints(); ++j) {
+      int nv = model.joints[j].nv;
+      U[j].resize(6, nv);
+      Dinv[j].resize(nv, nv);
+      u[j].resize(nv);
+    }
+  }
+
+  // Kinematics, per joint: placement in the parent joint frame and in the world; spatial
+  // velocity, acceleration and bias acceleration in the joint frame.
+  std::vector<SE3<S>> liMi, oMi;
+  std::vector<SE3<S>> oMf;  // placement of every frame in the world
+  std::vector<Motion<S>> v, a, c;
+  std::vector<Force<S>> f;  // RNEA: force transmitted by each joint, in its frame
+
+  VecX<S> tau;     // RNEA output
+  VecX<S> ddq;     // ABA output
+  MatX<S> M;       // CRBA output (full, symmetric)
+  Matrix6X<S> J;   // joint Jacobian columns in the world frame (crba, computeJointJacobians)
+
+  std::vector<InertiaSum<S>> oYcrb;  // CRBA: composite inertias in the world frame
+  std::vector<Mat6<S>> Ia;           // ABA: articulated inertias
+  std::vector<Force<S>> pA;          // ABA: bias forces
+  std::vector<JointBlock<S>> U;
+  std::vector<JointSquare<S>> Dinv;
+  std::vector<JointVector<S>> u;
+
+  Vec3<S> com = Vec3<S>::Zero();
+  S mass = S(0);
+};
+
+}  // namespace robodiff

@@ -1,0 +1,74 @@
+// Frame Jacobians: J such that the frame's spatial velocity is J * v.
+//
+// Reference frames (as in Pinocchio):
+//  - LOCAL: the velocity of the frame, expressed in the frame itself.
+//  - WORLD: the spatial velocity expressed in the world frame at the world origin.
+//  - LOCAL_WORLD_ALIGNED: the velocity of the frame's origin, with world-aligned axes.
+// Rows are [linear x y z; angular x y z]; columns follow v.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "robodiff/dynamics/kinematics.hpp"
+
+namespace robodiff {
+
+enum class ReferenceFrame { Local, World, LocalWorldAligned };
+
+inline const char* toString(ReferenceFrame r) {
+  switch (r) {
+    case ReferenceFrame::Local: return "LOCAL";
+    case ReferenceFrame::World: return "WORLD";
+    case ReferenceFrame::LocalWorldAligned: return "LOCAL_WORLD_ALIGNED";
+  }
+  return "?";
+}
+
+inline ReferenceFrame parseReferenceFrame(const std::string& name) {
+  if (name == "LOCAL") return ReferenceFrame::Local;
+  if (name == "WORLD") return ReferenceFrame::World;
+  if (name == "LOCAL_WORLD_ALIGNED") return ReferenceFrame::LocalWorldAligned;
+  throw std::invalid_argument("unknown reference frame '" + name + "' (expected LOCAL, WORLD or LOCAL_WORLD_ALIGNED)");
+}
+
+// data.J: every joint's motion-subspace columns in the world frame, for configuration q.
+template <class S, class Q>
+const Matrix6X<S>& computeJointJacobians(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q) {
+  forwardKinematics(model, data, q);
+  for (int j = 0; j < model.njoints(); ++j) {
+    const Joint& joint = model.joints[j];
+    for (int k = 0; k < joint.nv; ++k)
+      data.J.col(joint.idx_v + k) = data.oMi[j].act(subspaceColumn<S>(joint, k)).toVector();
+  }
+  return data.J;
+}
+
+// The 6 x nv Jacobian of a frame (after computeJointJacobians, or after
+// forwardKinematics when `data.J` is filled).
+template <class S>
+Matrix6X<S> frameJacobian(const Model& model, const Data<S>& data, int frame_index, ReferenceFrame reference) {
+  Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
+  const Frame& frame = model.frames[frame_index];
+  for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
+    const Joint& joint = model.joints[j];
+    J.middleCols(joint.idx_v, joint.nv) = data.J.middleCols(joint.idx_v, joint.nv);
+  }
+  if (reference == ReferenceFrame::World) return J;
+  SE3<S> oMf = framePlacement(model, data, frame_index);
+  if (reference == ReferenceFrame::Local) return oMf.actInvMotions(J);
+  // Velocity of the frame origin p: v_p = v_o + w x p = v_o - p x w.
+  for (int c = 0; c < model.nv; ++c)
+    J.template block<3, 1>(0, c) -= oMf.translation.cross(Vec3<S>(J.template block<3, 1>(3, c)));
+  return J;
+}
+
+// Convenience: kinematics, joint Jacobians and one frame Jacobian at q.
+template <class S, class Q>
+Matrix6X<S> computeFrameJacobian(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, int frame_index,
+                                 ReferenceFrame reference) {
+  computeJointJacobians(model, data, q);
+  return frameJacobian(model, data, frame_index, reference);
+}
+
+}  // namespace robodiff

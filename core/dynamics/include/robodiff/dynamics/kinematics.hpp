@@ -1,0 +1,74 @@
+// Forward kinematics: placements of every joint (and frame) in the world, and the
+// spatial velocities / accelerations of the joints in their own frames.
+#pragma once
+
+#include "robodiff/dynamics/data.hpp"
+#include "robodiff/dynamics/joint.hpp"
+
+namespace robodiff {
+
+// data.liMi, data.oMi for configuration q.
+template <class S, class Q> void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q) {
+  for (int j = 0; j < model.njoints(); ++j) {
+    const Joint& joint = model.joints[j];
+    data.liMi[j] = jointPlacement<S>(joint, q);
+    data.oMi[j] = joint.parent >= 0 ? data.oMi[joint.parent] * data.liMi[j] : data.liMi[j];
+  }
+}
+
+// ... plus data.v (joint velocities in joint frames) for velocity v.
+template <class S, class Q, class V>
+void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v) {
+  for (int j = 0; j < model.njoints(); ++j) {
+    const Joint& joint = model.joints[j];
+    data.liMi[j] = jointPlacement<S>(joint, q);
+    Motion<S> vj = jointMotion<S>(joint, v);
+    if (joint.parent >= 0) {
+      data.oMi[j] = data.oMi[joint.parent] * data.liMi[j];
+      data.v[j] = data.liMi[j].actInv(data.v[joint.parent]) + vj;
+    } else {
+      data.oMi[j] = data.liMi[j];
+      data.v[j] = vj;
+    }
+  }
+}
+
+// ... plus data.a (joint accelerations, gravity not included) for acceleration a.
+template <class S, class Q, class V, class A>
+void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
+                       const Eigen::MatrixBase<A>& a) {
+  for (int j = 0; j < model.njoints(); ++j) {
+    const Joint& joint = model.joints[j];
+    data.liMi[j] = jointPlacement<S>(joint, q);
+    Motion<S> vj = jointMotion<S>(joint, v);
+    Motion<S> aj = jointMotion<S>(joint, a);
+    if (joint.parent >= 0) {
+      const int p = joint.parent;
+      data.oMi[j] = data.oMi[p] * data.liMi[j];
+      data.v[j] = data.liMi[j].actInv(data.v[p]) + vj;
+      data.a[j] = data.liMi[j].actInv(data.a[p]) + aj + data.v[j].cross(vj);
+    } else {
+      data.oMi[j] = data.liMi[j];
+      data.v[j] = vj;
+      data.a[j] = aj;
+    }
+  }
+}
+
+// data.oMf from data.oMi (call after forwardKinematics).
+template <class S> void updateFramePlacements(const Model& model, Data<S>& data) {
+  for (int f = 0; f < model.nframes(); ++f) {
+    const Frame& frame = model.frames[f];
+    const auto& placement = asScalar<S>(frame.placement);
+    data.oMf[f] = frame.parent_joint >= 0 ? data.oMi[frame.parent_joint] * placement : SE3<S>(placement);
+  }
+}
+
+// Placement of one frame in the world (after forwardKinematics).
+template <class S> SE3<S> framePlacement(const Model& model, const Data<S>& data, int frame_index) {
+  const Frame& frame = model.frames[frame_index];
+  const auto& placement = asScalar<S>(frame.placement);
+  return frame.parent_joint >= 0 ? data.oMi[frame.parent_joint] * placement : SE3<S>(placement);
+}
+
+}  // namespace robodiff

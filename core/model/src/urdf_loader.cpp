@@ -1,0 +1,198 @@
+#include "robodiff/model/urdf_loader.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <sstream>
+
+#include <Eigen/Geometry>
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include "urdf_validation.hpp"
+
+namespace robodiff {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double snap(double x) {
+  if (std::abs(x) <= kRotationSnapTolerance) return 0.0;
+  if (std::abs(x - 1.0) <= kRotationSnapTolerance) return 1.0;
+  if (std::abs(x + 1.0) <= kRotationSnapTolerance) return -1.0;
+  return x;
+}
+
+Eigen::Matrix3d snapped(const Eigen::Matrix3d& m) { return m.unaryExpr(&snap); }
+
+Eigen::Matrix3d toRotation(const urdf::Rotation& r) {
+  Eigen::Quaterniond q(r.w, r.x, r.y, r.z);
+  return snapped(q.normalized().toRotationMatrix());
+}
+
+SE3<double> toSE3(const urdf::Pose& pose) {
+  return {toRotation(pose.rotation), Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z)};
+}
+
+// Inertia of a URDF link, in the link frame.
+Inertia<double> linkInertia(const urdf::Link& link) {
+  if (!link.inertial) return Inertia<double>::Zero();
+  const urdf::Inertial& in = *link.inertial;
+  SE3<double> origin = toSE3(in.origin);
+  Eigen::Matrix3d I;
+  I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+  return Inertia<double>{in.mass, origin.translation, origin.rotation * I * origin.rotation.transpose()};
+}
+
+// Rigid union; two massless bodies keep only their rotational inertias.
+Inertia<double> merge(const Inertia<double>& a, const Inertia<double>& b) {
+  if (a.mass + b.mass > 0) return a + b;
+  return {0.0, Eigen::Vector3d::Zero(), a.inertia + b.inertia};
+}
+
+void setAxis(Joint& joint, const urdf::Vector3& axis) {
+  Eigen::Vector3d a(axis.x, axis.y, axis.z);
+  a = a.normalized().unaryExpr(&snap);
+  joint.axis = a;
+  joint.axis_kind = a == Eigen::Vector3d::UnitX()   ? AxisKind::X
+                    : a == Eigen::Vector3d::UnitY() ? AxisKind::Y
+                    : a == Eigen::Vector3d::UnitZ() ? AxisKind::Z
+                                                    : AxisKind::Unaligned;
+}
+
+Joint makeJoint(const urdf::Joint& uj, int parent, const SE3<double>& placement) {
+  Joint j;
+  j.name = uj.name;
+  j.parent = parent;
+  j.placement = placement;
+  j.type = uj.type == urdf::Joint::PRISMATIC ? JointType::Prismatic : JointType::Revolute;
+  j.continuous = uj.type == urdf::Joint::CONTINUOUS;
+  j.nq = j.nv = 1;
+  setAxis(j, uj.axis);
+  double lower = -kInf, upper = kInf, velocity = kInf, effort = kInf;
+  if (uj.limits) {
+    if (!j.continuous) lower = uj.limits->lower, upper = uj.limits->upper;
+    if (uj.limits->velocity > 0) velocity = uj.limits->velocity;
+    if (uj.limits->effort > 0) effort = uj.limits->effort;
+  }
+  j.lower = Eigen::VectorXd::Constant(1, lower);
+  j.upper = Eigen::VectorXd::Constant(1, upper);
+  j.velocity_limit = Eigen::VectorXd::Constant(1, velocity);
+  j.effort_limit = Eigen::VectorXd::Constant(1, effort);
+  j.damping = Eigen::VectorXd::Constant(1, uj.dynamics ? uj.dynamics->damping : 0.0);
+  j.friction = Eigen::VectorXd::Constant(1, uj.dynamics ? uj.dynamics->friction : 0.0);
+  return j;
+}
+
+Joint makeFreeFlyer() {
+  Joint j;
+  j.name = "root_joint";
+  j.type = JointType::FreeFlyer;
+  j.parent = -1;
+  j.nq = 7;
+  j.nv = 6;
+  j.lower = Eigen::VectorXd::Constant(7, -kInf);
+  j.upper = Eigen::VectorXd::Constant(7, kInf);
+  j.velocity_limit = Eigen::VectorXd::Constant(6, kInf);
+  j.effort_limit = Eigen::VectorXd::Constant(6, kInf);
+  j.damping = j.friction = Eigen::VectorXd::Zero(6);
+  return j;
+}
+
+// urdfdom reports through console_bridge; collect its errors for our message.
+class CollectErrors : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) messages += (messages.empty() ? "" : "; ") + text;
+  }
+  std::string messages;
+};
+
+urdf::ModelInterfaceSharedPtr parseWithUrdfdom(const std::string& xml, const std::string& source) {
+  static std::mutex mutex;  // console_bridge's handler is process-global
+  std::lock_guard<std::mutex> lock(mutex);
+  CollectErrors errors;
+  console_bridge::useOutputHandler(&errors);
+  urdf::ModelInterfaceSharedPtr parsed = urdf::parseURDF(xml);
+  console_bridge::restorePreviousOutputHandler();
+  if (!parsed)
+    throw ModelError(source + ": urdfdom rejected the URDF: " +
+                     (errors.messages.empty() ? "no reason given" : errors.messages));
+  return parsed;
+}
+
+// A URDF joint still to be visited, with where its origin sits in the model: the
+// moving joint above it and the placement of the origin in that joint's frame.
+struct Pending {
+  urdf::JointConstSharedPtr joint;  // null for the root link
+  urdf::LinkConstSharedPtr child;
+  int parent;
+  SE3<double> placement;
+};
+
+Model build(const urdf::ModelInterface& urdf_model, RootJoint root) {
+  Model model;
+  model.name = urdf_model.getName();
+  model.root = root;
+  model.frames.push_back({"universe", FrameType::FixedJoint, -1, SE3<double>::Identity()});
+
+  int root_joint = -1;
+  if (root == RootJoint::FreeFlyer) {
+    model.joints.push_back(makeFreeFlyer());
+    model.bodies.push_back(Inertia<double>::Zero());
+    model.frames.push_back({"root_joint", FrameType::Joint, 0, SE3<double>::Identity()});
+    root_joint = 0;
+  }
+
+  // Depth-first pre-order, children in urdfdom's order; an explicit stack, so that
+  // deep chains need no deep recursion.
+  std::vector<Pending> stack{{nullptr, urdf_model.getRoot(), root_joint, SE3<double>::Identity()}};
+  while (!stack.empty()) {
+    Pending at = stack.back();
+    stack.pop_back();
+    int joint = at.parent;
+    SE3<double> link_placement = at.placement;
+    if (at.joint && at.joint->type == urdf::Joint::FIXED) {
+      model.frames.push_back({at.joint->name, FrameType::FixedJoint, joint, link_placement});
+    } else if (at.joint) {
+      joint = model.njoints();
+      model.joints.push_back(makeJoint(*at.joint, at.parent, at.placement));
+      model.bodies.push_back(Inertia<double>::Zero());
+      model.frames.push_back({at.joint->name, FrameType::Joint, joint, SE3<double>::Identity()});
+      link_placement = SE3<double>::Identity();
+    }
+    const urdf::Link& link = *at.child;
+    if (joint >= 0)  // bodies fixed to the universe do not move and carry no dynamics
+      model.bodies[joint] = merge(model.bodies[joint], linkInertia(link).transformedBy(link_placement));
+    model.frames.push_back({link.name, FrameType::Body, joint, link_placement});
+
+    const auto& children = link.child_joints;
+    for (auto it = children.rbegin(); it != children.rend(); ++it)
+      stack.push_back({*it, urdf_model.getLink((*it)->child_link_name), joint,
+                       link_placement * toSE3((*it)->parent_to_joint_origin_transform)});
+  }
+  model.finalize();
+  return model;
+}
+
+}  // namespace
+
+Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& source_name) {
+  detail::validateUrdfXml(xml, source_name);
+  urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(xml, source_name);
+  return build(*parsed, root);
+}
+
+Model loadUrdfFile(const std::string& path, RootJoint root) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ModelError(path + ": cannot open URDF file: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ModelError(path + ": cannot read URDF file");
+  return loadUrdfString(text.str(), root, path);
+}
+
+}  // namespace robodiff

@@ -1,0 +1,227 @@
+#include "urdf_validation.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <tinyxml.h>
+
+#include "robodiff/model/urdf_loader.hpp"
+
+namespace robodiff::detail {
+namespace {
+
+class Validator {
+ public:
+  explicit Validator(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const TiXmlNode* at, const std::string& what) const {
+    std::ostringstream s;
+    s << source_;
+    if (at) s << ":" << at->Row();
+    s << ": " << what;
+    throw ModelError(s.str());
+  }
+
+  // "joint 'name'" / "link 'name'" for messages.
+  static std::string describe(const TiXmlElement* e) {
+    const char* name = e->Attribute("name");
+    return std::string(e->Value()) + " '" + (name ? name : "?") + "'";
+  }
+
+  // Parses attribute `attr` of `e` as exactly `count` finite numbers. A missing
+  // attribute gives `fallback` (or an error when there is none).
+  std::vector<double> numbers(const TiXmlElement* owner, const TiXmlElement* e, const char* attr,
+                              size_t count, const std::vector<double>* fallback = nullptr) const {
+    const char* text = e->Attribute(attr);
+    if (!text) {
+      if (fallback) return *fallback;
+      fail(e, describe(owner) + ": <" + e->Value() + "> has no '" + attr + "' attribute");
+    }
+    std::vector<double> out;
+    std::istringstream in(text);
+    std::string token;
+    while (in >> token) {
+      char* end = nullptr;
+      double v = std::strtod(token.c_str(), &end);
+      if (end == token.c_str() || *end != '\0')
+        fail(e, describe(owner) + ": <" + e->Value() + " " + attr + "=\"" + text + "\">: '" + token +
+                    "' is not a number");
+      if (!std::isfinite(v))
+        fail(e, describe(owner) + ": <" + e->Value() + " " + attr + "=\"" + text + "\">: '" + token +
+                    "' is not a finite number");
+      out.push_back(v);
+    }
+    if (out.size() != count)
+      fail(e, describe(owner) + ": <" + e->Value() + " " + attr + "=\"" + text + "\">: expected " +
+                  std::to_string(count) + " number(s), found " + std::to_string(out.size()));
+    return out;
+  }
+
+  void checkOrigin(const TiXmlElement* owner, const TiXmlElement* parent) const {
+    static const std::vector<double> zero3{0, 0, 0};
+    if (const TiXmlElement* o = parent->FirstChildElement("origin")) {
+      numbers(owner, o, "xyz", 3, &zero3);
+      numbers(owner, o, "rpy", 3, &zero3);
+    }
+  }
+
+  void checkLink(const TiXmlElement* link) const {
+    const TiXmlElement* inertial = link->FirstChildElement("inertial");
+    if (!inertial) return;
+    checkOrigin(link, inertial);
+    const TiXmlElement* mass = inertial->FirstChildElement("mass");
+    if (!mass) fail(inertial, describe(link) + ": <inertial> has no <mass>");
+    double m = numbers(link, mass, "value", 1)[0];
+    if (m < 0) fail(mass, describe(link) + ": negative mass " + mass->Attribute("value"));
+    const TiXmlElement* inertia = inertial->FirstChildElement("inertia");
+    if (!inertia) fail(inertial, describe(link) + ": <inertial> has no <inertia>");
+    const char* keys[] = {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"};
+    double v[6];
+    for (int k = 0; k < 6; ++k) v[k] = numbers(link, inertia, keys[k], 1)[0];
+    Eigen::Matrix3d I;
+    I << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I, Eigen::EigenvaluesOnly);
+    double smallest = eig.eigenvalues().minCoeff();
+    double scale = std::max(1.0, I.cwiseAbs().maxCoeff());
+    if (smallest < -1e-12 * scale) {
+      std::ostringstream s;
+      s << describe(link) << ": inertia (ixx=" << v[0] << " ixy=" << v[1] << " ixz=" << v[2]
+        << " iyy=" << v[3] << " iyz=" << v[4] << " izz=" << v[5]
+        << ") is not positive semi-definite (smallest eigenvalue " << smallest << ")";
+      fail(inertia, s.str());
+    }
+  }
+
+  void checkJoint(const TiXmlElement* joint) const {
+    const char* type = joint->Attribute("type");
+    const std::string what = describe(joint);
+    if (!type) fail(joint, what + ": no 'type' attribute");
+    const std::string t = type;
+    if (t == "floating" || t == "planar")
+      fail(joint, what + ": joint type '" + t + "' is not supported inside the tree "
+                  "(a free-flyer is only available as the root, with the floating-base option)");
+    if (t != "revolute" && t != "continuous" && t != "prismatic" && t != "fixed")
+      fail(joint, what + ": unknown joint type '" + t + "'");
+    // A mimic tag on a fixed joint has nothing to mimic (URDFs such as Talos carry them).
+    const TiXmlElement* mimic = t == "fixed" ? nullptr : joint->FirstChildElement("mimic");
+    if (mimic) {
+      const char* other = mimic->Attribute("joint");
+      fail(mimic, what + ": <mimic joint=\"" + (other ? other : "?") + "\"> is not supported");
+    }
+    for (const char* role : {"parent", "child"}) {
+      const TiXmlElement* e = joint->FirstChildElement(role);
+      if (!e || !e->Attribute("link"))
+        fail(joint, what + ": missing <" + role + " link=\"...\">");
+    }
+    checkOrigin(joint, joint);
+    if (t == "fixed") return;
+    if (const TiXmlElement* axis = joint->FirstChildElement("axis")) {
+      auto a = numbers(joint, axis, "xyz", 3);
+      if (std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) < 1e-12)
+        fail(axis, what + ": zero axis <axis xyz=\"" + axis->Attribute("xyz") + "\">");
+    }
+    const TiXmlElement* limit = joint->FirstChildElement("limit");
+    if (!limit && t != "continuous")
+      fail(joint, what + ": a " + t + " joint needs a <limit> element");
+    if (limit) {
+      static const std::vector<double> zero{0};
+      double lower = numbers(joint, limit, "lower", 1, &zero)[0];
+      double upper = numbers(joint, limit, "upper", 1, &zero)[0];
+      double effort = numbers(joint, limit, "effort", 1, t == "continuous" ? &zero : nullptr)[0];
+      double velocity = numbers(joint, limit, "velocity", 1, t == "continuous" ? &zero : nullptr)[0];
+      if (t != "continuous" && lower > upper) {
+        std::ostringstream s;
+        s << what << ": <limit> lower " << lower << " is above upper " << upper;
+        fail(limit, s.str());
+      }
+      if (effort < 0 || velocity < 0) fail(limit, what + ": <limit> effort and velocity must not be negative");
+    }
+    if (const TiXmlElement* dyn = joint->FirstChildElement("dynamics")) {
+      static const std::vector<double> zero{0};
+      numbers(joint, dyn, "damping", 1, &zero);
+      numbers(joint, dyn, "friction", 1, &zero);
+    }
+  }
+
+  void run(const std::string& xml) {
+    TiXmlDocument doc;
+    doc.Parse(xml.c_str(), nullptr, TIXML_ENCODING_UTF8);
+    if (doc.Error()) {
+      std::ostringstream s;
+      s << source_ << ":" << doc.ErrorRow() << ":" << doc.ErrorCol() << ": malformed XML: " << doc.ErrorDesc();
+      throw ModelError(s.str());
+    }
+    const TiXmlElement* robot = doc.RootElement();
+    if (!robot) throw ModelError(source_ + ": empty document, no <robot> element");
+    if (std::string(robot->Value()) != "robot")
+      fail(robot, std::string("the root element is <") + robot->Value() + ">, expected <robot>");
+
+    std::map<std::string, const TiXmlElement*> links;
+    for (const TiXmlElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
+      const char* name = l->Attribute("name");
+      if (!name || !*name) fail(l, "a <link> without a name");
+      if (!links.emplace(name, l).second) fail(l, "duplicate link name '" + std::string(name) + "'");
+      checkLink(l);
+    }
+    if (links.empty()) fail(robot, "the robot has no <link>");
+
+    std::map<std::string, std::string> parent_of;  // child link -> joint name
+    std::set<std::string> joint_names;
+    std::map<std::string, std::vector<std::string>> children;
+    for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+      const char* name = j->Attribute("name");
+      if (!name || !*name) fail(j, "a <joint> without a name");
+      if (!joint_names.insert(name).second) fail(j, "duplicate joint name '" + std::string(name) + "'");
+      checkJoint(j);
+      std::string parent = j->FirstChildElement("parent")->Attribute("link");
+      std::string child = j->FirstChildElement("child")->Attribute("link");
+      if (!links.count(parent)) fail(j, describe(j) + ": parent link '" + parent + "' is not defined");
+      if (!links.count(child)) fail(j, describe(j) + ": child link '" + child + "' is not defined");
+      if (parent == child) fail(j, describe(j) + ": link '" + child + "' is its own parent");
+      auto [it, fresh] = parent_of.emplace(child, name);
+      if (!fresh)
+        fail(j, describe(j) + ": link '" + child + "' is already the child of joint '" + it->second + "'");
+      children[parent].push_back(child);
+    }
+
+    std::vector<std::string> roots;
+    for (const auto& [name, _] : links)
+      if (!parent_of.count(name)) roots.push_back(name);
+    if (roots.empty()) fail(robot, "no root link: every link is the child of a joint (a cycle)");
+    if (roots.size() > 1) {
+      std::string list;
+      for (const auto& r : roots) list += (list.empty() ? "'" : ", '") + r + "'";
+      fail(robot, "several root links (" + list + "): a URDF must form one tree");
+    }
+    // Every link reachable from the root (else a cycle hangs off the tree).
+    std::set<std::string> seen{roots[0]};
+    std::vector<std::string> stack{roots[0]};
+    while (!stack.empty()) {
+      std::string l = stack.back();
+      stack.pop_back();
+      for (const auto& c : children[l])
+        if (seen.insert(c).second) stack.push_back(c);
+    }
+    if (seen.size() != links.size()) {
+      for (const auto& [name, element] : links)
+        if (!seen.count(name)) fail(element, "link '" + name + "' is not reachable from root '" + roots[0] +
+                                                 "' (its joints form a cycle)");
+    }
+  }
+
+ private:
+  std::string source_;
+};
+
+}  // namespace
+
+void validateUrdfXml(const std::string& xml, const std::string& source) {
+  Validator(source).run(xml);
+}
+
+}  // namespace robodiff::detail

@@ -1,0 +1,12 @@
+// Checks a URDF's XML text before urdfdom sees it, so that every problem is reported
+// with the source, the line, the element and the value (urdfdom reports none of these).
+#pragma once
+
+#include <string>
+
+namespace robodiff::detail {
+
+// Throws ModelError on the first problem found.
+void validateUrdfXml(const std::string& xml, const std::string& source);
+
+}  // namespace robodiff::detail

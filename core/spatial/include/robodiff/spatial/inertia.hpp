@@ -1,0 +1,77 @@
+// Rigid-body spatial inertia: mass, centre of mass (lever) and rotational inertia about
+// the centre of mass, all in the body's frame.
+#pragma once
+
+#include "robodiff/spatial/force.hpp"
+#include "robodiff/spatial/math.hpp"
+#include "robodiff/spatial/motion.hpp"
+#include "robodiff/spatial/se3.hpp"
+
+namespace robodiff {
+
+// The 10 standard inertial parameters, in Pinocchio's order:
+// [m, m*c_x, m*c_y, m*c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz], the rotational inertia
+// taken about the body frame's origin (not the centre of mass).
+template <class S> using InertialParameters = Eigen::Matrix<S, 10, 1>;
+
+template <class S> struct Inertia {
+  S mass = S(0);
+  Vec3<S> lever = Vec3<S>::Zero();          // centre of mass in the body frame
+  Mat3<S> inertia = Mat3<S>::Zero();        // rotational inertia about the centre of mass
+
+  static Inertia Zero() { return Inertia{}; }
+
+  template <class T> Inertia<T> cast() const {
+    return {T(mass), lever.template cast<T>(), inertia.template cast<T>()};
+  }
+
+  // Momentum of the body moving with twist v: I * v.
+  Force<S> operator*(const Motion<S>& v) const {
+    Vec3<S> lin = mass * (v.linear - lever.cross(v.angular));
+    return {lin, inertia * v.angular + lever.cross(lin)};
+  }
+
+  // The 6x6 matrix ([linear; angular] ordering).
+  Mat6<S> matrix() const {
+    Mat6<S> m;
+    Mat3<S> cx = skew<S>(lever);
+    Mat3<S> mcx = mass * cx;
+    m.template block<3, 3>(0, 0) = mass * Mat3<S>::Identity();
+    m.template block<3, 3>(0, 3) = -mcx;
+    m.template block<3, 3>(3, 0) = mcx;
+    m.template block<3, 3>(3, 3) = inertia - mcx * cx;
+    return m;
+  }
+
+  // This inertia (given in frame b) expressed in frame a, with aMb.
+  Inertia transformedBy(const SE3<S>& aMb) const {
+    return {mass, aMb.act(lever), aMb.rotation * inertia * aMb.rotation.transpose()};
+  }
+
+  // Rotational inertia about the body frame's origin.
+  Mat3<S> inertiaAboutOrigin() const {
+    Mat3<S> cx = skew<S>(lever);
+    return inertia - mass * (cx * cx);
+  }
+
+  // Rigid union of two bodies given in the same frame (parallel-axis theorem).
+  // Divides by the total mass: the model merges only bodies with positive total mass.
+  Inertia operator+(const Inertia& o) const {
+    S m = mass + o.mass;
+    Vec3<S> c = (mass * lever + o.mass * o.lever) / m;
+    Vec3<S> d1 = lever - c, d2 = o.lever - c;
+    Mat3<S> s1 = skew<S>(d1), s2 = skew<S>(d2);
+    Mat3<S> i = inertia - mass * (s1 * s1) + o.inertia - o.mass * (s2 * s2);
+    return {m, c, i};
+  }
+
+  InertialParameters<S> parameters() const {
+    Mat3<S> io = inertiaAboutOrigin();
+    InertialParameters<S> p;
+    p << mass, mass * lever.x(), mass * lever.y(), mass * lever.z(),
+         io(0, 0), io(0, 1), io(1, 1), io(0, 2), io(1, 2), io(2, 2);
+    return p;
+  }
+};
+
+}  // namespace robodiff
