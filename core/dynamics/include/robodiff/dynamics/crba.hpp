@@ -13,42 +13,66 @@ namespace robodiff {
 // The body inertia (given in its joint frame) in the world frame, linearly parametrised.
 template <class S> InertiaSum<S> worldInertia(const Inertia<double>& body, const SE3<S>& oMi) {
   const auto& I = asScalar<S>(body);
+  const Mat3<S>& R = oMi.rotation;
   InertiaSum<S> out;
   out.mass = I.mass;
-  Vec3<S> c = oMi.act(I.lever);
+  const Vec3<S> c = oMi.act(I.lever);
   out.h = I.mass * c;
-  Mat3<S> cx = skew<S>(c);
-  out.rotational = oMi.rotation * I.inertia * oMi.rotation.transpose() - I.mass * (cx * cx);
+  // R I R^T (symmetric: upper triangle, then mirrored) + m (|c|^2 1 - c c^T).
+  const Mat3<S> RI = R * I.inertia;
+  const S cc = c.squaredNorm();
+  for (int r = 0; r < 3; ++r)
+    for (int k = r; k < 3; ++k) {
+      S value = RI.row(r).dot(R.row(k)) - I.mass * (c[r] * c[k]);
+      if (r == k) value += I.mass * cc;
+      out.rotational(r, k) = value;
+      out.rotational(k, r) = value;
+    }
   return out;
 }
 
+// Column k of a joint's motion subspace in the world frame, given the joint's oMi.
+template <class S> Vec6<S> worldSubspaceColumn(const Joint& joint, const SE3<S>& oMi, int k) {
+  if (joint.type == JointType::Revolute && joint.axis_kind != AxisKind::Unaligned) {
+    Vec6<S> col;
+    const auto axis = oMi.rotation.col(detail::axisIndex(joint.axis_kind));
+    col.template tail<3>() = axis;
+    col.template head<3>() = oMi.translation.cross(Vec3<S>(axis));
+    return col;
+  }
+  return oMi.act(subspaceColumn<S>(joint, k)).toVector();
+}
+
 template <class S, class Q> const MatX<S>& crba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q) {
-  for (int j = 0; j < model.njoints(); ++j) {
+  const int n = model.njoints();
+  for (int j = 0; j < n; ++j) {
     const Joint& joint = model.joints[j];
     data.liMi[j] = jointPlacement<S>(joint, q);
     data.oMi[j] = joint.parent >= 0 ? data.oMi[joint.parent] * data.liMi[j] : data.liMi[j];
-    for (int k = 0; k < joint.nv; ++k)
-      data.J.col(joint.idx_v + k) = data.oMi[j].act(subspaceColumn<S>(joint, k)).toVector();
+    for (int k = 0; k < joint.nv; ++k) data.J.col(joint.idx_v + k) = worldSubspaceColumn(joint, data.oMi[j], k);
     data.oYcrb[j] = worldInertia(model.bodies[j], data.oMi[j]);
   }
-  for (int j = model.njoints() - 1; j >= 0; --j) {
+  // Leaves to root. When joint j is reached its composite inertia is complete, and the
+  // columns Ag = Y_k J_k of its whole subtree are known: row block j of the upper
+  // triangle is J_j^T Ag over the subtree's columns (contiguous in depth-first order).
+  for (int j = n - 1; j >= 0; --j) {
     const Joint& joint = model.joints[j];
     for (int k = 0; k < joint.nv; ++k) {
       const int col = joint.idx_v + k;
-      Force<S> F = data.oYcrb[j] * Motion<S>::fromVector(data.J.col(col));
-      // Row i of column `col` for every joint i from j up to the root.
-      for (int i = j; i >= 0; i = model.joints[i].parent) {
-        const Joint& ancestor = model.joints[i];
-        for (int r = 0; r < ancestor.nv; ++r) {
-          const int row = ancestor.idx_v + r;
-          if (row > col) continue;  // the lower triangle is filled by symmetry below
-          const Motion<S> Jr = Motion<S>::fromVector(data.J.col(row));
-          data.M(row, col) = Jr.dot(F);
-          data.M(col, row) = data.M(row, col);
-        }
-      }
+      data.Ag.col(col) = (data.oYcrb[j] * Motion<S>::fromVector(data.J.col(col))).toVector();
     }
+    const int end = model.subtree_end[j] < n ? model.joints[model.subtree_end[j]].idx_v : model.nv;
+    // 6-vector dot products, unrolled (a dynamic-size block product costs more in calls).
+    for (int r = joint.idx_v; r < joint.idx_v + joint.nv; ++r)
+      for (int c = r; c < end; ++c) data.M(r, c) = data.J.col(r).dot(data.Ag.col(c));
     if (joint.parent >= 0) data.oYcrb[joint.parent] += data.oYcrb[j];
+  }
+  // The lower triangle by symmetry, over the same structure.
+  for (int j = 0; j < n; ++j) {
+    const Joint& joint = model.joints[j];
+    const int end = model.subtree_end[j] < n ? model.joints[model.subtree_end[j]].idx_v : model.nv;
+    for (int r = joint.idx_v; r < joint.idx_v + joint.nv; ++r)
+      for (int c = r + 1; c < end; ++c) data.M(c, r) = data.M(r, c);
   }
   return data.M;
 }

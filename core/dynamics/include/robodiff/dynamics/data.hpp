@@ -39,7 +39,7 @@ template <class S> struct Data {
       : liMi(model.njoints()), oMi(model.njoints()), oMf(model.nframes()),
         v(model.njoints()), a(model.njoints()), c(model.njoints()), f(model.njoints()),
         tau(VecX<S>::Zero(model.nv)), ddq(VecX<S>::Zero(model.nv)),
-        M(MatX<S>::Zero(model.nv, model.nv)), J(Matrix6X<S>::Zero(6, model.nv)),
+        M(MatX<S>::Zero(model.nv, model.nv)), J(Matrix6X<S>::Zero(6, model.nv)), Ag(Matrix6X<S>::Zero(6, model.nv)),
         oYcrb(model.njoints()), Ia(model.njoints()), pA(model.njoints()),
         U(model.njoints()), Dinv(model.njoints()), u(model.njoints()) {
     for (int j = 0; j < model.njoints(); ++j) {
@@ -61,6 +61,7 @@ template <class S> struct Data {
   VecX<S> ddq;     // ABA output
   MatX<S> M;       // CRBA output (full, symmetric)
   Matrix6X<S> J;   // joint Jacobian columns in the world frame (crba, computeJointJacobians)
+  Matrix6X<S> Ag;  // CRBA: composite inertia times J, per column
 
   std::vector<InertiaSum<S>> oYcrb;  // CRBA: composite inertias in the world frame
   std::vector<Mat6<S>> Ia;           // ABA: articulated inertias

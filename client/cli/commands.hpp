@@ -1,0 +1,13 @@
+// The subcommands of the `robodiff` tool. Each adds itself to the app; its callback
+// throws on bad input (std::exception with a message naming the problem) and main
+// turns that into a message on stderr and a non-zero exit status.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace robodiff::cli {
+
+void addComputeCommand(CLI::App& app);
+void addMakeRobotCommand(CLI::App& app);
+
+}  // namespace robodiff::cli

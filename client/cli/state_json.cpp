@@ -1,0 +1,92 @@
+#include "state_json.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "robodiff/dynamics/configuration.hpp"
+
+namespace robodiff::cli {
+namespace {
+
+Eigen::VectorXd toVector(const nlohmann::json& value, const std::string& path, const std::string& key) {
+  if (!value.is_array()) throw std::invalid_argument(path + ": \"" + key + "\" must be an array of numbers");
+  Eigen::VectorXd out(value.size());
+  for (size_t i = 0; i < value.size(); ++i) {
+    if (!value[i].is_number())
+      throw std::invalid_argument(path + ": \"" + key + "\"[" + std::to_string(i) + "] is " + value[i].dump() +
+                                  ", not a number");
+    out[i] = value[i].get<double>();
+    if (!std::isfinite(out[i]))
+      throw std::invalid_argument(path + ": \"" + key + "\"[" + std::to_string(i) + "] is not finite");
+  }
+  return out;
+}
+
+}  // namespace
+
+State readStateFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path + ": cannot open state file");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::invalid_argument(path + ": not valid JSON: " + e.what());
+  }
+  if (!j.is_object()) throw std::invalid_argument(path + ": expected an object {\"q\": [...], \"v\": [...], ...}");
+  State s;
+  if (j.contains("q")) s.q = toVector(j["q"], path, "q");
+  if (j.contains("v")) s.v = toVector(j["v"], path, "v");
+  if (j.contains("a")) s.a = toVector(j["a"], path, "a");
+  if (j.contains("tau")) s.tau = toVector(j["tau"], path, "tau");
+  return s;
+}
+
+State randomState(const Model& model, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  State s;
+  s.q = randomConfiguration(model, rng);
+  auto uniform = [&rng](int n) {
+    Eigen::VectorXd x(n);
+    for (int i = 0; i < n; ++i) x[i] = -1.0 + 2.0 * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+    return x;
+  };
+  s.v = uniform(model.nv);
+  s.a = uniform(model.nv);
+  s.tau = uniform(model.nv);
+  return s;
+}
+
+const Eigen::VectorXd& require(const State& state, const Model& model, const std::string& key,
+                               const std::string& what, const std::string& source) {
+  const std::optional<Eigen::VectorXd>& value =
+      key == "q" ? state.q : key == "v" ? state.v : key == "a" ? state.a : state.tau;
+  if (!value) throw std::invalid_argument(source + ": no \"" + key + "\", needed by " + what);
+  const int expected = key == "q" ? model.nq : model.nv;
+  if (value->size() != expected) {
+    std::ostringstream s;
+    s << source << ": \"" << key << "\" has " << value->size() << " numbers, the model has "
+      << (key == "q" ? "nq" : "nv") << " = " << expected;
+    throw std::invalid_argument(s.str());
+  }
+  if (key == "q") {
+    for (const Joint& j : model.joints) {
+      if (j.type != JointType::FreeFlyer) continue;
+      double norm = value->segment<4>(j.idx_q + 3).norm();
+      if (std::abs(norm - 1.0) > 1e-6) {
+        std::ostringstream s;
+        s << source << ": \"q\"[" << j.idx_q + 3 << ".." << j.idx_q + 6 << "] (quaternion x y z w of '" << j.name
+          << "') has norm " << norm << ", expected a unit quaternion";
+        throw std::invalid_argument(s.str());
+      }
+    }
+  }
+  return *value;
+}
+
+}  // namespace robodiff::cli

@@ -1,0 +1,30 @@
+// The robot state a CLI command evaluates at: {"q": [...], "v": [...], "a": [...],
+// "tau": [...]} (the golden files' sample shape; keys not needed are ignored).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "robodiff/model/model.hpp"
+
+namespace robodiff::cli {
+
+struct State {
+  std::optional<Eigen::VectorXd> q, v, a, tau;
+};
+
+// Reads a state file; errors name the file, the key and the problem.
+State readStateFile(const std::string& path);
+
+// A random state: q within limits (unit quaternion for a free-flyer), v, a, tau uniform.
+State randomState(const Model& model, std::uint64_t seed);
+
+// The vector `key` of the state, checked against the model (length, unit quaternion).
+// `what` names the function that needs it, for the message.
+const Eigen::VectorXd& require(const State& state, const Model& model, const std::string& key,
+                               const std::string& what, const std::string& source);
+
+}  // namespace robodiff::cli
