@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -178,15 +179,29 @@ Model build(const urdf::ModelInterface& urdf_model, RootJoint root) {
   return model;
 }
 
+// XML turns a tab or line break inside an attribute value into a space (attribute-value
+// normalisation, XML 1.0 section 3.3.3), but TinyXML does not and urdfdom splits vectors
+// such as xyz="0 0 1" on spaces only. Outside attribute values these characters are
+// whitespace or text that urdfdom ignores, so they are replaced everywhere; the
+// validator has already seen the original text, with its line numbers.
+std::string normaliseWhitespace(std::string xml) {
+  for (char& c : xml)
+    if (c == '\t' || c == '\n' || c == '\r') c = ' ';
+  return xml;
+}
+
 }  // namespace
 
 Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& source_name) {
   detail::validateUrdfXml(xml, source_name);
-  urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(xml, source_name);
+  urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(normaliseWhitespace(xml), source_name);
   return build(*parsed, root);
 }
 
 Model loadUrdfFile(const std::string& path, RootJoint root) {
+  std::error_code ec;  // a directory opens as a stream and reads as an empty document
+  if (std::filesystem::is_directory(path, ec))
+    throw ModelError(path + ": cannot read URDF file: it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelError(path + ": cannot open URDF file: " + std::strerror(errno));
   std::ostringstream text;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <locale>
 #include <map>
 #include <set>
 #include <sstream>
@@ -46,14 +47,19 @@ class Validator {
     std::istringstream in(text);
     std::string token;
     while (in >> token) {
-      char* end = nullptr;
-      double v = std::strtod(token.c_str(), &end);
-      if (end == token.c_str() || *end != '\0')
+      // Read the token as urdfdom does (C locale, the whole token: no hex floats, no
+      // "nan"/"inf"), so that what passes here also parses there, whatever the locale.
+      std::istringstream number(token);
+      number.imbue(std::locale::classic());
+      double v = 0;
+      number >> v;
+      if (number.fail() || !number.eof()) {
+        char* end = nullptr;
+        double w = std::strtod(token.c_str(), &end);
+        bool non_finite = end != token.c_str() && *end == '\0' && !std::isfinite(w);
         fail(e, describe(owner) + ": <" + e->Value() + " " + attr + "=\"" + text + "\">: '" + token +
-                    "' is not a number");
-      if (!std::isfinite(v))
-        fail(e, describe(owner) + ": <" + e->Value() + " " + attr + "=\"" + text + "\">: '" + token +
-                    "' is not a finite number");
+                    (non_finite ? "' is not a finite number" : "' is not a number"));
+      }
       out.push_back(v);
     }
     if (out.size() != count)
@@ -132,17 +138,22 @@ class Validator {
       static const std::vector<double> zero{0};
       double lower = numbers(joint, limit, "lower", 1, &zero)[0];
       double upper = numbers(joint, limit, "upper", 1, &zero)[0];
-      double effort = numbers(joint, limit, "effort", 1, t == "continuous" ? &zero : nullptr)[0];
-      double velocity = numbers(joint, limit, "velocity", 1, t == "continuous" ? &zero : nullptr)[0];
-      if (t != "continuous" && lower > upper) {
-        std::ostringstream s;
-        s << what << ": <limit> lower " << lower << " is above upper " << upper;
-        fail(limit, s.str());
-      }
-      if (effort < 0 || velocity < 0) fail(limit, what + ": <limit> effort and velocity must not be negative");
+      // urdfdom requires effort and velocity on every <limit>, continuous joints included.
+      double effort = numbers(joint, limit, "effort", 1)[0];
+      double velocity = numbers(joint, limit, "velocity", 1)[0];
+      auto text = [&](const char* attr) {
+        const char* value = limit->Attribute(attr);
+        return std::string(value ? value : "0");
+      };
+      if (t != "continuous" && lower > upper)
+        fail(limit, what + ": <limit> lower " + text("lower") + " is above upper " + text("upper"));
+      if (effort < 0) fail(limit, what + ": <limit> negative effort " + text("effort"));
+      if (velocity < 0) fail(limit, what + ": <limit> negative velocity " + text("velocity"));
     }
     if (const TiXmlElement* dyn = joint->FirstChildElement("dynamics")) {
       static const std::vector<double> zero{0};
+      if (!dyn->Attribute("damping") && !dyn->Attribute("friction"))  // urdfdom rejects it
+        fail(dyn, what + ": <dynamics> has neither 'damping' nor 'friction'");
       numbers(joint, dyn, "damping", 1, &zero);
       numbers(joint, dyn, "friction", 1, &zero);
     }
@@ -153,7 +164,9 @@ class Validator {
     doc.Parse(xml.c_str(), nullptr, TIXML_ENCODING_UTF8);
     if (doc.Error()) {
       std::ostringstream s;
-      s << source_ << ":" << doc.ErrorRow() << ":" << doc.ErrorCol() << ": malformed XML: " << doc.ErrorDesc();
+      s << source_;
+      if (doc.ErrorRow() > 0) s << ":" << doc.ErrorRow() << ":" << doc.ErrorCol();  // 0: no location
+      s << ": malformed XML: " << doc.ErrorDesc();
       throw ModelError(s.str());
     }
     const TiXmlElement* robot = doc.RootElement();
