@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -71,9 +72,18 @@ State randomState(const Model& model) {
 class Collect : public benchmark::ConsoleReporter {
  public:
   std::map<std::string, double> micros;
+  std::set<std::string> medians;
   void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs)
-      if (r.run_type == Run::RT_Iteration) micros[r.benchmark_name()] = r.GetAdjustedRealTime() / 1e3;
+    // With --benchmark_repetitions the median is kept, else the single run.
+    for (const Run& r : runs) {
+      const std::string name = r.run_name.str();
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median") {
+        micros[name] = r.GetAdjustedRealTime() / 1e3;
+        medians.insert(name);
+      } else if (r.run_type == Run::RT_Iteration && !medians.count(name)) {
+        micros[name] = r.GetAdjustedRealTime() / 1e3;
+      }
+    }
     ConsoleReporter::ReportRuns(runs);
   }
 };

@@ -94,7 +94,7 @@ void run(const Options& o) {
     Eigen::MatrixXd out = fn == "crba" ? Eigen::MatrixXd(crba(model, data, need("q")))
                                        : jointTorqueRegressor(model, data, need("q"), need("v"), need("a"));
     result = toJson(out);
-    table = Table::matrix(fn == "crba" ? "M(q)" : "Y(q, v, a)", vlabels, out);
+    table = fn == "crba" ? Table::matrix("M(q)", vlabels, out, vlabels) : Table::matrix("Y(q, v, a)", vlabels, out);
   } else if (fn == "fk") {
     forwardKinematics(model, data, need("q"));
     updateFramePlacements(model, data);

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# The main job, from a fresh Debian 12 machine: install what is missing, build, and show
+# robodiff working. For now that is `robodiff compute` on the project's own robots (and
+# on the Panda arm when ../shared is present); later the service and a client.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+deploy/install-deps.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)" --target robodiff_cli
+
+rd=build/bin/robodiff
+arm=examples/robots/arm7.urdf
+show() { echo; echo "\$ robodiff $*"; "$rd" "$@"; }
+
+echo
+echo "== robodiff on its own 7-joint arm ($arm), at a random state (seed 1)"
+show compute --urdf "$arm" --function rnea --random-state 1 --format table
+show compute --urdf "$arm" --function crba --random-state 1 --format table
+show compute --urdf "$arm" --function aba --random-state 1 --format table
+show compute --urdf "$arm" --function jacobian --frame tool --reference LOCAL_WORLD_ALIGNED --random-state 1 --format table
+
+quad=examples/robots/quadruped.urdf
+echo
+echo "== a quadruped with a free-flyer base ($quad)"
+show compute --urdf "$quad" --floating-base --function com --random-state 2 --format table
+
+panda=../shared/robots/panda_arm_fixed_fingers.urdf
+if [ -f "$panda" ]; then
+  echo
+  echo "== the Franka Panda arm ($panda)"
+  show compute --urdf "$panda" --function rnea --random-state 1 --format table
+  show compute --urdf "$panda" --function crba --random-state 1 --format table
+else
+  echo
+  echo "(../shared/robots not found: skipping the Panda arm)"
+fi
