@@ -24,6 +24,6 @@ std::string readFile(const std::filesystem::path& path);
 #define ROBODIFF_REQUIRE_SHARED(dir_variable)                                              \
   auto dir_variable##_opt = ::robodiff::testing::sharedDir();                              \
   if (!dir_variable##_opt)                                                                 \
-    GTEST_SKIP() << "../shared (robots/, golden/) not found beside the source tree and "   \
-                    "ROBODIFF_SHARED not set: skipping the comparison with external data"; \
+    GTEST_SKIP() << "no shared data (robots/, golden/): neither $ROBODIFF_SHARED nor "   \
+                    "../shared beside the source tree has it; skipping this comparison";      \
   const std::filesystem::path dir_variable = *dir_variable##_opt
