@@ -1,0 +1,82 @@
+// A function spec: which model function to build, which of its inputs are variables
+// (given at each evaluation) and which are fixed (folded into the generated code),
+// which outputs (value, Jacobians, weighted Hessians), and how to build it.
+// The JSON form is described by schema/function-spec.schema.json; examples/specs/
+// holds a documented spec for each function.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "robodiff/dynamics/jacobian.hpp"
+
+namespace robodiff {
+
+enum class ModelFunction { Rnea, Aba, Crba, Gravity, Nle, Fk, FrameJacobian, Com, Regressor, Minv };
+
+struct FunctionInfo {
+  ModelFunction function;
+  const char* name;
+  std::vector<std::string> inputs;  // in evaluation order, e.g. q, v, a
+  bool needs_frame;
+  const char* description;
+};
+
+// Every model function, with its inputs.
+const std::vector<FunctionInfo>& modelFunctions();
+const FunctionInfo& functionInfo(ModelFunction f);
+
+enum class OutputKind { Value, Jacobian, Hessian };
+enum class Layout { Dense, Sparse };
+
+struct OutputSpec {
+  OutputKind kind = OutputKind::Value;
+  std::vector<std::string> wrt;  // Jacobian / Hessian: inputs differentiated against, in this order
+  Layout layout = Layout::Dense;
+  // Hessian: sum_i w_i d2 f_i / dx2 (lower triangle); the weights are a runtime input
+  // block named "weights" (size of the value), or fixed numbers.
+  std::optional<std::vector<double>> fixed_weights;
+};
+
+struct InputSpec {
+  std::string name;
+  std::optional<std::vector<double>> fixed;  // set: a constant folded into the code
+};
+
+struct BuildOptions {
+  std::string optimization = "O2";  // O0 | O1 | O2 | O3
+  bool march_native = true;
+  bool fast_math = false;           // never on unless asked: it changes results
+};
+
+struct FunctionSpec {
+  ModelFunction function = ModelFunction::Rnea;
+  std::vector<InputSpec> inputs;    // every input of the function, in its order
+  std::vector<OutputSpec> outputs;
+  std::string frame;                // fk, frame_jacobian
+  ReferenceFrame reference = ReferenceFrame::LocalWorldAligned;
+  BuildOptions build;
+
+  const InputSpec& input(const std::string& name) const;
+};
+
+// A spec that cannot be used. The message names the source, the field (a JSON path
+// such as outputs[1].wrt[0]) and the value.
+class SpecError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+FunctionSpec parseFunctionSpec(const std::string& json_text, const std::string& source = "<spec>");
+FunctionSpec loadFunctionSpec(const std::string& path);
+
+// The normalised JSON of a spec: defaults filled in, keys sorted, one spelling per
+// meaning; equal for specs that build the same function (part of the cache key).
+std::string normalizedSpecJson(const FunctionSpec& spec);
+
+const char* toString(ModelFunction f);
+const char* toString(OutputKind k);
+
+}  // namespace robodiff

@@ -1,0 +1,274 @@
+#include "robodiff/functions/function_spec.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace robodiff {
+
+using nlohmann::json;
+
+const std::vector<FunctionInfo>& modelFunctions() {
+  static const std::vector<FunctionInfo> all = {
+      {ModelFunction::Rnea, "rnea", {"q", "v", "a"}, false, "inverse dynamics tau = RNEA(q, v, a)"},
+      {ModelFunction::Aba, "aba", {"q", "v", "tau"}, false, "forward dynamics ddq = ABA(q, v, tau)"},
+      {ModelFunction::Crba, "crba", {"q"}, false, "joint-space mass matrix M(q), nv x nv"},
+      {ModelFunction::Gravity, "gravity", {"q"}, false, "generalised gravity g(q)"},
+      {ModelFunction::Nle, "nle", {"q", "v"}, false, "nonlinear effects C(q, v) v + g(q)"},
+      {ModelFunction::Fk, "fk", {"q"}, true, "placement of a frame in the world, 3 x 4 [R | p]"},
+      {ModelFunction::FrameJacobian, "frame_jacobian", {"q"}, true, "6 x nv Jacobian of a frame"},
+      {ModelFunction::Com, "com", {"q"}, false, "centre of mass in the world"},
+      {ModelFunction::Regressor, "regressor", {"q", "v", "a"}, false, "joint-torque regressor, nv x 10 njoints"},
+      {ModelFunction::Minv, "minv", {"q"}, false, "inverse of the mass matrix, nv x nv"},
+  };
+  return all;
+}
+
+const FunctionInfo& functionInfo(ModelFunction f) {
+  for (const FunctionInfo& info : modelFunctions())
+    if (info.function == f) return info;
+  throw std::logic_error("functionInfo: unknown function");
+}
+
+const char* toString(ModelFunction f) { return functionInfo(f).name; }
+
+const char* toString(OutputKind k) {
+  switch (k) {
+    case OutputKind::Value: return "value";
+    case OutputKind::Jacobian: return "jacobian";
+    case OutputKind::Hessian: return "hessian";
+  }
+  return "?";
+}
+
+const InputSpec& FunctionSpec::input(const std::string& name) const {
+  for (const InputSpec& i : inputs)
+    if (i.name == name) return i;
+  throw std::invalid_argument(std::string(toString(function)) + " has no input '" + name + "'");
+}
+
+namespace {
+
+class Parser {
+ public:
+  explicit Parser(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw SpecError(source_ + ": " + (path.empty() ? "" : path + ": ") + what);
+  }
+
+  void onlyKeys(const json& object, const std::string& path, std::initializer_list<const char*> allowed) const {
+    for (const auto& [key, _] : object.items()) {
+      bool known = key == "description" || key == "$comment" || key == "$schema";
+      for (const char* a : allowed) known = known || key == a;
+      if (!known) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        fail(path.empty() ? key : path + "." + key, "unknown field (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  std::string string(const json& value, const std::string& path) const {
+    if (!value.is_string()) fail(path, value.dump() + " is not a string");
+    return value.get<std::string>();
+  }
+
+  std::vector<double> numbers(const json& value, const std::string& path) const {
+    if (!value.is_array()) fail(path, value.dump() + " is not an array of numbers");
+    std::vector<double> out;
+    for (size_t i = 0; i < value.size(); ++i) {
+      const std::string at = path + "[" + std::to_string(i) + "]";
+      if (!value[i].is_number()) fail(at, value[i].dump() + " is not a number");
+      double x = value[i].get<double>();
+      if (!std::isfinite(x)) fail(at, "not a finite number");
+      out.push_back(x);
+    }
+    return out;
+  }
+
+  std::vector<std::string> wrtList(const json& value, const std::string& path, const FunctionSpec& spec) const {
+    const FunctionInfo& info = functionInfo(spec.function);
+    if (!value.is_array() || value.empty()) fail(path, "must be a non-empty array of input names");
+    std::vector<std::string> out;
+    for (size_t i = 0; i < value.size(); ++i) {
+      const std::string at = path + "[" + std::to_string(i) + "]";
+      std::string name = string(value[i], at);
+      bool known = false;
+      for (const std::string& input : info.inputs) known = known || input == name;
+      if (!known) {
+        std::string list;
+        for (const std::string& input : info.inputs) list += (list.empty() ? "" : ", ") + input;
+        fail(at, "'" + name + "' is not an input of " + info.name + " (its inputs: " + list + ")");
+      }
+      if (spec.input(name).fixed) fail(at, "'" + name + "' is fixed; only variable inputs can be differentiated against");
+      for (const std::string& seen : out)
+        if (seen == name) fail(at, "'" + name + "' is listed twice");
+      out.push_back(name);
+    }
+    return out;
+  }
+
+  FunctionSpec parse(const std::string& text) {
+    json root;
+    try {
+      root = json::parse(text);
+    } catch (const json::parse_error& e) {
+      fail("", std::string("not valid JSON: ") + e.what());
+    }
+    if (!root.is_object()) fail("", "a spec is a JSON object");
+    onlyKeys(root, "", {"function", "inputs", "outputs", "frame", "reference", "build"});
+    FunctionSpec spec;
+
+    if (!root.contains("function")) fail("function", "missing (one of: " + functionList() + ")");
+    const std::string name = string(root["function"], "function");
+    const FunctionInfo* info = nullptr;
+    for (const FunctionInfo& f : modelFunctions())
+      if (name == f.name) info = &f;
+    if (!info) fail("function", "'" + name + "' is not a model function (one of: " + functionList() + ")");
+    spec.function = info->function;
+
+    for (const std::string& input : info->inputs) spec.inputs.push_back({input, std::nullopt});
+    if (root.contains("inputs")) {
+      const json& inputs = root["inputs"];
+      if (!inputs.is_object()) fail("inputs", "must be an object {\"q\": \"variable\", \"v\": {\"fixed\": [...]}, ...}");
+      for (const auto& [key, value] : inputs.items()) {
+        const std::string path = "inputs." + key;
+        InputSpec* target = nullptr;
+        for (InputSpec& i : spec.inputs)
+          if (i.name == key) target = &i;
+        if (!target) fail(path, "'" + key + "' is not an input of " + info->name);
+        if (value.is_string() && value.get<std::string>() == "variable") continue;
+        if (value.is_object() && value.size() == 1 && value.contains("fixed")) {
+          target->fixed = numbers(value["fixed"], path + ".fixed");
+          continue;
+        }
+        fail(path, value.dump() + " is neither \"variable\" nor {\"fixed\": [numbers]}");
+      }
+    }
+
+    if (!root.contains("outputs")) fail("outputs", "missing: list at least one output, e.g. [{\"kind\": \"value\"}]");
+    const json& outputs = root["outputs"];
+    if (!outputs.is_array() || outputs.empty()) fail("outputs", "must be a non-empty array");
+    for (size_t i = 0; i < outputs.size(); ++i) {
+      const std::string path = "outputs[" + std::to_string(i) + "]";
+      const json& o = outputs[i];
+      if (!o.is_object()) fail(path, o.dump() + " is not an object {\"kind\": ...}");
+      if (!o.contains("kind")) fail(path + ".kind", "missing (value, jacobian or hessian)");
+      const std::string kind = string(o["kind"], path + ".kind");
+      OutputSpec out;
+      if (kind == "value") {
+        onlyKeys(o, path, {"kind"});
+      } else if (kind == "jacobian") {
+        onlyKeys(o, path, {"kind", "wrt", "layout"});
+        out.kind = OutputKind::Jacobian;
+        if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
+        out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
+        if (o.contains("layout")) {
+          const std::string layout = string(o["layout"], path + ".layout");
+          if (layout == "sparse") out.layout = Layout::Sparse;
+          else if (layout != "dense") fail(path + ".layout", "'" + layout + "' is neither dense nor sparse");
+        }
+      } else if (kind == "hessian") {
+        onlyKeys(o, path, {"kind", "wrt", "weights"});
+        out.kind = OutputKind::Hessian;
+        if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
+        out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
+        if (o.contains("weights") && !(o["weights"].is_string() && o["weights"] == "input"))
+          out.fixed_weights = numbers(o["weights"], path + ".weights");
+      } else {
+        fail(path + ".kind", "'" + kind + "' is not an output kind (value, jacobian or hessian)");
+      }
+      spec.outputs.push_back(out);
+    }
+
+    if (info->needs_frame) {
+      if (!root.contains("frame")) fail("frame", std::string("missing: ") + info->name + " needs a frame name");
+      spec.frame = string(root["frame"], "frame");
+      if (spec.frame.empty()) fail("frame", "empty frame name");
+    } else if (root.contains("frame")) {
+      fail("frame", root["frame"].dump() + " given, but " + info->name + " takes no frame");
+    }
+    if (root.contains("reference")) {
+      if (spec.function != ModelFunction::FrameJacobian)
+        fail("reference", std::string("only frame_jacobian takes a reference frame, not ") + info->name);
+      const std::string ref = string(root["reference"], "reference");
+      try {
+        spec.reference = parseReferenceFrame(ref);
+      } catch (const std::invalid_argument& e) {
+        fail("reference", e.what());
+      }
+    }
+
+    if (root.contains("build")) {
+      const json& b = root["build"];
+      if (!b.is_object()) fail("build", "must be an object");
+      onlyKeys(b, "build", {"optimization", "march_native", "fast_math"});
+      if (b.contains("optimization")) {
+        spec.build.optimization = string(b["optimization"], "build.optimization");
+        const std::set<std::string> levels = {"O0", "O1", "O2", "O3"};
+        if (!levels.count(spec.build.optimization))
+          fail("build.optimization", "'" + spec.build.optimization + "' is not one of O0, O1, O2, O3");
+      }
+      for (const char* flag : {"march_native", "fast_math"}) {
+        if (!b.contains(flag)) continue;
+        if (!b[flag].is_boolean()) fail(std::string("build.") + flag, b[flag].dump() + " is not true or false");
+        (std::string(flag) == "march_native" ? spec.build.march_native : spec.build.fast_math) = b[flag].get<bool>();
+      }
+    }
+    return spec;
+  }
+
+ private:
+  static std::string functionList() {
+    std::string list;
+    for (const FunctionInfo& f : modelFunctions()) list += (list.empty() ? "" : ", ") + std::string(f.name);
+    return list;
+  }
+  std::string source_;
+};
+
+}  // namespace
+
+FunctionSpec parseFunctionSpec(const std::string& json_text, const std::string& source) {
+  return Parser(source).parse(json_text);
+}
+
+FunctionSpec loadFunctionSpec(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw SpecError(path + ": cannot open spec file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseFunctionSpec(text.str(), path);
+}
+
+std::string normalizedSpecJson(const FunctionSpec& spec) {
+  json j;
+  j["function"] = toString(spec.function);
+  json inputs = json::object();
+  for (const InputSpec& i : spec.inputs) {
+    if (i.fixed) inputs[i.name] = {{"fixed", *i.fixed}};
+    else inputs[i.name] = "variable";
+  }
+  j["inputs"] = inputs;
+  json outputs = json::array();
+  for (const OutputSpec& o : spec.outputs) {
+    json out = {{"kind", toString(o.kind)}};
+    if (o.kind != OutputKind::Value) out["wrt"] = o.wrt;
+    if (o.kind == OutputKind::Jacobian) out["layout"] = o.layout == Layout::Sparse ? "sparse" : "dense";
+    if (o.kind == OutputKind::Hessian) out["weights"] = o.fixed_weights ? json(*o.fixed_weights) : json("input");
+    outputs.push_back(out);
+  }
+  j["outputs"] = outputs;
+  if (functionInfo(spec.function).needs_frame) j["frame"] = spec.frame;
+  if (spec.function == ModelFunction::FrameJacobian) j["reference"] = toString(spec.reference);
+  j["build"] = {{"optimization", spec.build.optimization},
+                {"march_native", spec.build.march_native},
+                {"fast_math", spec.build.fast_math}};
+  return j.dump();
+}
+
+}  // namespace robodiff
