@@ -33,26 +33,38 @@ void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBas
   }
 }
 
-// ... plus data.a (joint accelerations, gravity not included) for acceleration a.
+namespace detail {
+
+// The second-order forward pass: placements, velocities and accelerations, with a0 the
+// acceleration of the universe (zero for kinematics; -gravity for dynamics).
 template <class S, class Q, class V, class A>
-void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
-                       const Eigen::MatrixBase<A>& a) {
+void accelerationPass(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
+                      const Eigen::MatrixBase<A>& a, const Motion<S>& a0) {
   for (int j = 0; j < model.njoints(); ++j) {
     const Joint& joint = model.joints[j];
+    const int p = joint.parent;
     data.liMi[j] = jointPlacement<S>(joint, q);
     Motion<S> vj = jointMotion<S>(joint, v);
     Motion<S> aj = jointMotion<S>(joint, a);
-    if (joint.parent >= 0) {
-      const int p = joint.parent;
+    if (p >= 0) {
       data.oMi[j] = data.oMi[p] * data.liMi[j];
       data.v[j] = data.liMi[j].actInv(data.v[p]) + vj;
       data.a[j] = data.liMi[j].actInv(data.a[p]) + aj + data.v[j].cross(vj);
     } else {
       data.oMi[j] = data.liMi[j];
       data.v[j] = vj;
-      data.a[j] = aj;
+      data.a[j] = data.liMi[j].actInv(a0) + aj;
     }
   }
+}
+
+}  // namespace detail
+
+// ... plus data.a (joint accelerations, gravity not included) for acceleration a.
+template <class S, class Q, class V, class A>
+void forwardKinematics(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
+                       const Eigen::MatrixBase<A>& a) {
+  detail::accelerationPass(model, data, q, v, a, Motion<S>::Zero());
 }
 
 // data.oMf from data.oMi (call after forwardKinematics).

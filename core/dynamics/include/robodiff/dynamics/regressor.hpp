@@ -43,18 +43,10 @@ template <class S> Eigen::Matrix<S, 6, 10> bodyRegressor(const Motion<S>& v, con
 template <class S, class Q, class V, class A>
 MatX<S> jointTorqueRegressor(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
                              const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a) {
-  forwardKinematics(model, data, q, v, a);
-  // forwardKinematics leaves gravity out; it enters through the root acceleration.
-  const Motion<S> a0 = gravityAcceleration<S>(model);
+  detail::accelerationPass(model, data, q, v, a, gravityAcceleration<S>(model));
   MatX<S> Y = MatX<S>::Zero(model.nv, 10 * model.njoints());
-  std::vector<Motion<S>> ag(model.njoints());
   for (int j = 0; j < model.njoints(); ++j) {
-    const int p = model.joints[j].parent;
-    // Gravity seen by joint j: the parent's, carried into j's frame.
-    ag[j] = data.liMi[j].actInv(p >= 0 ? ag[p] : a0);
-  }
-  for (int j = 0; j < model.njoints(); ++j) {
-    Eigen::Matrix<S, 6, 10> F = bodyRegressor(data.v[j], data.a[j] + ag[j]);
+    Eigen::Matrix<S, 6, 10> F = bodyRegressor(data.v[j], data.a[j]);
     for (int i = j; i >= 0; i = model.joints[i].parent) {
       const Joint& joint = model.joints[i];
       for (int col = 0; col < 10; ++col) {

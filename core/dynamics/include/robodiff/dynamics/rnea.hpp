@@ -6,6 +6,7 @@
 
 #include "robodiff/dynamics/data.hpp"
 #include "robodiff/dynamics/joint.hpp"
+#include "robodiff/dynamics/kinematics.hpp"
 
 namespace robodiff {
 
@@ -34,22 +35,8 @@ template <class S> void rneaBackward(const Model& model, Data<S>& data) {
 template <class S, class Q, class V, class A>
 const VecX<S>& rnea(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
                     const Eigen::MatrixBase<A>& a, const std::vector<Force<S>>* fext = nullptr) {
-  const Motion<S> a0 = gravityAcceleration<S>(model);
+  detail::accelerationPass(model, data, q, v, a, gravityAcceleration<S>(model));
   for (int j = 0; j < model.njoints(); ++j) {
-    const Joint& joint = model.joints[j];
-    const int p = joint.parent;
-    data.liMi[j] = jointPlacement<S>(joint, q);
-    Motion<S> vj = jointMotion<S>(joint, v);
-    Motion<S> aj = jointMotion<S>(joint, a);
-    if (p >= 0) {
-      data.oMi[j] = data.oMi[p] * data.liMi[j];
-      data.v[j] = data.liMi[j].actInv(data.v[p]) + vj;
-      data.a[j] = data.liMi[j].actInv(data.a[p]) + aj + data.v[j].cross(vj);
-    } else {
-      data.oMi[j] = data.liMi[j];
-      data.v[j] = vj;
-      data.a[j] = data.liMi[j].actInv(a0) + aj;
-    }
     const auto& I = asScalar<S>(model.bodies[j]);
     data.f[j] = I * data.a[j] + data.v[j].cross(I * data.v[j]);
     if (fext) data.f[j] -= (*fext)[j];

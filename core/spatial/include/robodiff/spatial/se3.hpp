@@ -52,31 +52,13 @@ template <class S> struct SE3 {
 
   // Column-wise actions on 6xN blocks of motions / forces ([linear; angular] rows).
   template <class Derived> Matrix6X<S> actMotions(const Eigen::MatrixBase<Derived>& m) const {
-    Matrix6X<S> out(6, m.cols());
-    for (Eigen::Index c = 0; c < m.cols(); ++c) {
-      Motion<S> r = act(Motion<S>{m.template block<3, 1>(0, c), m.template block<3, 1>(3, c)});
-      out.template block<3, 1>(0, c) = r.linear;
-      out.template block<3, 1>(3, c) = r.angular;
-    }
-    return out;
+    return mapColumns<Motion<S>>(m, [this](const Motion<S>& x) { return act(x); });
   }
   template <class Derived> Matrix6X<S> actInvMotions(const Eigen::MatrixBase<Derived>& m) const {
-    Matrix6X<S> out(6, m.cols());
-    for (Eigen::Index c = 0; c < m.cols(); ++c) {
-      Motion<S> r = actInv(Motion<S>{m.template block<3, 1>(0, c), m.template block<3, 1>(3, c)});
-      out.template block<3, 1>(0, c) = r.linear;
-      out.template block<3, 1>(3, c) = r.angular;
-    }
-    return out;
+    return mapColumns<Motion<S>>(m, [this](const Motion<S>& x) { return actInv(x); });
   }
   template <class Derived> Matrix6X<S> actForces(const Eigen::MatrixBase<Derived>& f) const {
-    Matrix6X<S> out(6, f.cols());
-    for (Eigen::Index c = 0; c < f.cols(); ++c) {
-      Force<S> r = act(Force<S>{f.template block<3, 1>(0, c), f.template block<3, 1>(3, c)});
-      out.template block<3, 1>(0, c) = r.linear;
-      out.template block<3, 1>(3, c) = r.angular;
-    }
-    return out;
+    return mapColumns<Force<S>>(f, [this](const Force<S>& x) { return act(x); });
   }
 
   // The 6x6 matrix of a symmetric spatial operator (inertia, articulated inertia)
@@ -96,6 +78,19 @@ template <class S> struct SE3 {
     out.template block<3, 3>(0, 3) = b2;
     out.template block<3, 3>(3, 0) = b2.transpose();
     out.template block<3, 3>(3, 3) = c2;
+    return out;
+  }
+
+ private:
+  // Applies `action` to every column of m read as a spatial vector of type V.
+  template <class V, class Derived, class Action>
+  static Matrix6X<S> mapColumns(const Eigen::MatrixBase<Derived>& m, Action action) {
+    Matrix6X<S> out(6, m.cols());
+    for (Eigen::Index c = 0; c < m.cols(); ++c) {
+      V r = action(V{m.template block<3, 1>(0, c), m.template block<3, 1>(3, c)});
+      out.template block<3, 1>(0, c) = r.linear;
+      out.template block<3, 1>(3, c) = r.angular;
+    }
     return out;
   }
 };
