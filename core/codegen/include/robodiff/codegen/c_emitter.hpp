@@ -1,0 +1,72 @@
+// C source generation: a graph and function definitions in, the C sources of a
+// self-describing shared library out (see abi.h for the ABI it implements).
+//
+// The code is straight-line C99 (plus GNU vector extensions for the batched entry
+// point, compiled only by compilers that have them; others get a plain loop):
+// plain scalar locals (`double t4 = t1 * t2;`) reused by liveness, sin/cos of one
+// argument from one sincos() call, negations folded into their consumers, constants
+// printed exactly (shortest round-trip form), no fast-math assumptions.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::codegen {
+
+// Changes whenever the generated code changes for the same input (part of cache keys).
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.1.0";
+
+struct CodegenOptions {
+  // Operations per translation unit before a function is cut into parts compiled
+  // separately (in parallel); values crossing parts go through the work buffer.
+  // 0: never split.
+  std::uint32_t split_threshold = 0;
+  // Reuse a local once its value is dead (false: one local per value).
+  bool reuse_temporaries = true;
+  // The batched entry point evaluates this many knots at once in SIMD lanes.
+  // 0: chosen by the target at compile time (8 with AVX-512, 4 with AVX, else 2);
+  // 1: no SIMD variant, eval_batch loops over eval (also what compilers without GNU
+  // vector extensions, such as tcc, always get); else 2, 4, 8 or 16 lanes.
+  std::uint32_t batch_width = 0;
+};
+
+struct SourceFile {
+  std::string path;  // relative to the build directory
+  std::string text;
+};
+
+// What was generated for one function.
+struct GeneratedFunctionInfo {
+  std::string name;
+  std::uint32_t needed_nodes = 0;    // graph nodes the outputs reach
+  std::uint32_t operations = 0;      // arithmetic statements (a sincos counts once)
+  std::uint32_t sincos_pairs = 0;
+  std::uint32_t max_locals = 0;      // most scalar locals of one part
+  std::uint32_t parts = 1;           // translation units the body is spread over
+  std::uint32_t transfer_slots = 0;  // work-buffer doubles (per lane) between parts
+};
+
+struct GeneratedLibrary {
+  std::vector<SourceFile> sources;  // .c files, each one translation unit
+  std::vector<SourceFile> headers;  // files the sources include (abi.h); -I the build dir
+  std::vector<GeneratedFunctionInfo> functions;
+};
+
+// The library's sources: one file with every function's entry points and the
+// descriptor, plus one file per part of each split function. Throws
+// std::invalid_argument when a definition does not validate, or two share a name.
+GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector<FunctionDefinition>& functions,
+                                 const CodegenOptions& options = {});
+
+// The text of robodiff/codegen/abi.h this generator was built with (the sources include it).
+const std::string& abiHeaderText();
+
+// `value` as a C double literal that reads back exactly (e.g. "0.1", "2.0", "-1e-300",
+// "INFINITY").
+std::string cDoubleLiteral(double value);
+
+}  // namespace robodiff::codegen

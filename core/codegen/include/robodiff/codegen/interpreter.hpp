@@ -1,0 +1,56 @@
+// The interpreter: a function evaluated the moment it is traced, before (or instead
+// of) compiling it. The graph is lowered exactly as for the C code (only the needed
+// nodes, negations folded, sin/cos paired, slots reused by liveness) into a compact
+// instruction array, run by one loop.
+//
+// Same conventions as a compiled function (abi.h): one pointer per input and output
+// block, a caller-provided work buffer of workSize() doubles, no allocation, const and
+// thread-safe with one work buffer per thread.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::codegen {
+
+class Interpreter {
+ public:
+  // Throws std::invalid_argument when the definition does not validate against graph.
+  Interpreter(const symbolic::Graph& graph, FunctionDefinition function);
+
+  const FunctionDefinition& definition() const { return function_; }
+  std::size_t workSize() const { return work_size_; }  // doubles, for evaluate and evaluateBatch
+  std::size_t instructionCount() const { return code_.size() - 1; }  // End not counted
+
+  void evaluate(const double* const* in, double* const* out, double* work) const;
+  // n knots; knot k of block b at in[b] + k * size (as abi.h's eval_batch).
+  void evaluateBatch(std::uint64_t n, const double* const* in, double* const* out, double* work) const;
+
+  enum class Code : std::uint8_t {
+    Load, Store, StoreNeg, Neg,
+    Sin, Cos, SinCos, Tan, Asin, Acos, Atan, Exp, Log, Sqrt, Tanh, Abs,
+    Add, Sub, Mul, Div, Atan2, Pow, Min, Max, Select,
+    MulAdd, MulSub, SubMul,  // a*b + c, a*b - c, c - a*b (rounded twice, as unfused)
+    End,                     // the last instruction
+  };
+  // Load: v[dst] = in[a][b]; Store(Neg): out[a][b] = (-)v[c]; SinCos: v[dst] = sin(v[a]),
+  // v[b] = cos(v[a]); otherwise v[dst] = op(v[a], v[b], v[c]).
+  struct Instruction {
+    Code code;
+    std::uint32_t dst, a, b, c;
+  };
+
+ private:
+  void run(std::uint64_t knot, const double* const* in, double* const* out, double* v) const;
+
+  FunctionDefinition function_;
+  std::vector<std::uint32_t> input_sizes_, output_sizes_;
+  std::vector<double> constants_;  // copied to v[0 ..) at the start of each evaluation
+  std::vector<Instruction> code_;
+  std::size_t work_size_ = 0;
+};
+
+}  // namespace robodiff::codegen

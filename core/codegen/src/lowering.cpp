@@ -1,0 +1,382 @@
+#include "lowering.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <unordered_map>
+
+namespace robodiff::codegen::detail {
+namespace {
+
+using symbolic::Graph;
+using symbolic::Node;
+using symbolic::Op;
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+// A node as its consumers read it: a constant, or a computed/input node, maybe negated.
+struct Ref {
+  bool is_constant = false;
+  double value = 0.0;
+  NodeId base = 0;
+  bool negated = false;
+};
+
+// Neg nodes and products with the constant -1 are read through: they are operand flags.
+bool isNegation(const Graph& g, const Node& n, NodeId* operand) {
+  if (n.op == Op::Neg) {
+    *operand = n.args[0];
+    return true;
+  }
+  if (n.op == Op::Mul) {
+    if (g.isConstant(n.args[0], -1.0)) {
+      *operand = n.args[1];
+      return true;
+    }
+    if (g.isConstant(n.args[1], -1.0)) {
+      *operand = n.args[0];
+      return true;
+    }
+  }
+  return false;
+}
+
+Ref resolve(const Graph& g, NodeId id) {
+  Ref r;
+  NodeId operand;
+  while (isNegation(g, g.node(id), &operand)) {
+    r.negated = !r.negated;
+    id = operand;
+  }
+  const Node& n = g.node(id);
+  if (n.op == Op::Constant) {
+    r.is_constant = true;
+    r.value = r.negated ? -n.value : n.value;
+    r.negated = false;
+  } else {
+    r.base = id;
+  }
+  return r;
+}
+
+// One step of the schedule: a node computed, or a sin/cos pair computed together.
+struct Step {
+  NodeId first;
+  NodeId second = kNone;  // the cos of a SinCos pair (first is then the sin)
+  std::uint32_t chunk = 0;
+};
+
+struct OutputEntry {
+  std::uint32_t block, index;
+  bool negated;
+  std::uint32_t next;  // next entry of the same node, or kNone
+};
+
+class Lowerer {
+ public:
+  Lowerer(const Graph& g, const FunctionDefinition& f, const LoweringOptions& o)
+      : g_(g), f_(f), options_(o), n_(g.size()) {}
+
+  LoweredFunction run() {
+    markNeeded();
+    mapInputs();
+    collectOutputs();
+    schedule();
+    assignTransfers();
+    LoweredFunction out;
+    out.chunks.resize(chunk_count_);
+    emitPrologue(out.chunks[0]);
+    for (std::uint32_t c = 0; c < chunk_count_; ++c) emitChunk(c, out.chunks[c]);
+    out.transfer_slots = transfer_slots_;
+    out.needed_nodes = needed_count_;
+    for (const Chunk& c : out.chunks) out.operations += c.operations;
+    out.sincos_pairs = sincos_pairs_;
+    return out;
+  }
+
+ private:
+  bool isComputed(NodeId id) const {
+    const Node& n = g_.node(id);
+    NodeId operand;
+    return n.op != Op::Constant && n.op != Op::Input && !isNegation(g_, n, &operand);
+  }
+
+  void markNeeded() {
+    needed_.assign(n_, 0);
+    for (const auto& b : f_.outputs)
+      for (NodeId id : b.values) needed_[id] = 1;
+    for (std::size_t i = n_; i-- > 0;) {
+      if (!needed_[i]) continue;
+      ++needed_count_;
+      const Node& n = g_.node(static_cast<NodeId>(i));
+      for (int a = 0; a < symbolic::arity(n.op); ++a) needed_[n.args[a]] = 1;
+    }
+  }
+
+  void mapInputs() {
+    for (std::uint32_t b = 0; b < f_.inputs.size(); ++b)
+      for (std::uint32_t i = 0; i < f_.inputs[b].size; ++i) input_where_.push_back({b, i});
+  }
+
+  void collectOutputs() {
+    out_head_.assign(n_, kNone);
+    for (std::uint32_t b = 0; b < f_.outputs.size(); ++b) {
+      const auto& values = f_.outputs[b].values;
+      for (std::uint32_t i = values.size(); i-- > 0;) {  // reversed: lists come out in order
+        Ref r = resolve(g_, values[i]);
+        if (r.is_constant || g_.node(r.base).op == Op::Input) {
+          prologue_.push_back({b, i, r});
+          continue;
+        }
+        out_entries_.push_back({b, i, r.negated, out_head_[r.base]});
+        out_head_[r.base] = static_cast<std::uint32_t>(out_entries_.size() - 1);
+      }
+    }
+    std::reverse(prologue_.begin(), prologue_.end());
+  }
+
+  void schedule() {
+    std::unordered_map<NodeId, NodeId> sin_of, cos_of;  // argument -> node
+    for (NodeId id = 0; id < n_; ++id) {
+      if (!needed_[id]) continue;
+      const Node& n = g_.node(id);
+      if (n.op == Op::Sin) sin_of[n.args[0]] = id;
+      if (n.op == Op::Cos) cos_of[n.args[0]] = id;
+    }
+    std::vector<char> done(n_, 0);
+    std::uint32_t ops_in_chunk = 0;
+    chunk_count_ = 1;
+    for (NodeId id = 0; id < n_; ++id) {
+      if (!needed_[id] || done[id] || !isComputed(id)) continue;
+      const Node& n = g_.node(id);
+      Step s{id};
+      if (n.op == Op::Sin || n.op == Op::Cos) {
+        auto& partners = n.op == Op::Sin ? cos_of : sin_of;
+        auto it = partners.find(n.args[0]);
+        if (it != partners.end()) {
+          s.first = n.op == Op::Sin ? id : it->second;
+          s.second = n.op == Op::Sin ? it->second : id;
+          done[it->second] = 1;
+          ++sincos_pairs_;
+        }
+      }
+      std::uint32_t ops = s.second == kNone ? 1 : 2;
+      if (options_.split_threshold > 0 && ops_in_chunk > 0 && ops_in_chunk + ops > options_.split_threshold) {
+        ++chunk_count_;
+        ops_in_chunk = 0;
+      }
+      ops_in_chunk += ops;
+      s.chunk = chunk_count_ - 1;
+      done[id] = 1;
+      steps_.push_back(s);
+    }
+  }
+
+  // For each value needed by a later chunk than its own: a transfer slot of the work
+  // buffer, free again after the last chunk reading it.
+  void assignTransfers() {
+    last_chunk_use_.assign(n_, kNone);
+    for (const Step& s : steps_) {
+      const Node& n = g_.node(s.first);
+      for (int a = 0; a < symbolic::arity(n.op); ++a) {
+        Ref r = resolve(g_, n.args[a]);
+        if (r.is_constant) continue;
+        std::uint32_t& last = last_chunk_use_[r.base];
+        if (last == kNone || s.chunk > last) last = s.chunk;
+      }
+    }
+    transfer_slot_.assign(n_, kNone);
+    if (chunk_count_ == 1) return;
+    std::vector<std::vector<std::uint32_t>> release_at(chunk_count_ + 1);
+    std::vector<std::uint32_t> free_slots;
+    std::uint32_t current = kNone;
+    for (const Step& s : steps_) {
+      if (s.chunk != current) {
+        current = s.chunk;
+        for (std::uint32_t slot : release_at[current]) free_slots.push_back(slot);
+      }
+      for (NodeId d : {s.first, s.second}) {
+        if (d == kNone || last_chunk_use_[d] == kNone || last_chunk_use_[d] <= s.chunk) continue;
+        std::uint32_t slot;
+        if (!free_slots.empty()) {
+          slot = free_slots.back();
+          free_slots.pop_back();
+        } else {
+          slot = transfer_slots_++;
+        }
+        transfer_slot_[d] = slot;
+        release_at[last_chunk_use_[d] + 1].push_back(slot);
+      }
+    }
+  }
+
+  void emitPrologue(Chunk& chunk) {
+    for (const auto& p : prologue_) {
+      Instr ins;
+      ins.kind = InstrKind::StoreOutput;
+      ins.block = p.block;
+      ins.index = p.index;
+      if (p.ref.is_constant) {
+        ins.args[0].kind = Operand::Kind::Constant;
+        ins.args[0].value = p.ref.value;
+      } else {
+        auto [b, i] = input_where_[g_.node(p.ref.base).index];
+        ins.args[0].kind = Operand::Kind::Input;
+        ins.args[0].block = b;
+        ins.args[0].index = i;
+        ins.args[0].negated = p.ref.negated;
+      }
+      chunk.code.push_back(ins);
+    }
+  }
+
+  std::uint32_t allocate() {
+    if (options_.reuse_slots && !free_.empty()) {
+      std::uint32_t s = free_.back();
+      free_.pop_back();
+      return s;
+    }
+    return next_slot_++;
+  }
+  void release(std::uint32_t slot) {
+    if (options_.reuse_slots) free_.push_back(slot);
+  }
+
+  void emitChunk(std::uint32_t c, Chunk& chunk) {
+    if (last_read_.empty()) {
+      last_read_.assign(n_, kNone);
+      last_read_chunk_.assign(n_, kNone);
+      local_chunk_.assign(n_, kNone);
+      local_slot_.assign(n_, 0);
+    }
+    free_.clear();
+    next_slot_ = 0;
+    auto begin = std::lower_bound(steps_.begin(), steps_.end(), c, [](const Step& s, std::uint32_t v) { return s.chunk < v; });
+    auto end = std::upper_bound(begin, steps_.end(), c, [](std::uint32_t v, const Step& s) { return v < s.chunk; });
+    // Last position (step offset) in this chunk where each value is read.
+    for (auto it = begin; it != end; ++it) {
+      const Node& n = g_.node(it->first);
+      for (int a = 0; a < symbolic::arity(n.op); ++a) {
+        Ref r = resolve(g_, n.args[a]);
+        if (r.is_constant) continue;
+        last_read_[r.base] = static_cast<std::uint32_t>(it - begin);
+        last_read_chunk_[r.base] = c;
+      }
+    }
+    auto lastRead = [&](NodeId id) { return last_read_chunk_[id] == c ? last_read_[id] : kNone; };
+
+    for (auto it = begin; it != end; ++it) {
+      const std::uint32_t pos = static_cast<std::uint32_t>(it - begin);
+      const Node& n = g_.node(it->first);
+      Instr ins;
+      ins.kind = it->second == kNone ? InstrKind::Compute : InstrKind::SinCos;
+      ins.op = n.op;
+      NodeId dying[3];
+      int n_dying = 0;
+      for (int a = 0; a < symbolic::arity(n.op); ++a) {
+        Ref r = resolve(g_, n.args[a]);
+        Operand& o = ins.args[a];
+        if (r.is_constant) {
+          o.kind = Operand::Kind::Constant;
+          o.value = r.value;
+          continue;
+        }
+        if (local_chunk_[r.base] != c) load(c, r.base, chunk);
+        o.kind = Operand::Kind::Slot;
+        o.slot = local_slot_[r.base];
+        o.negated = r.negated;
+        if (lastRead(r.base) == pos && std::find(dying, dying + n_dying, r.base) == dying + n_dying)
+          dying[n_dying++] = r.base;
+      }
+      for (int d = 0; d < n_dying; ++d) release(local_slot_[dying[d]]);
+      ins.dst = define(c, it->first);
+      if (it->second != kNone) ins.dst2 = define(c, it->second);
+      chunk.code.push_back(ins);
+      ++chunk.operations;
+      for (NodeId d : {it->first, it->second}) {
+        if (d == kNone) continue;
+        afterDefinition(d, chunk);
+        // A value with no later reader in this chunk is dead at once.
+        if (lastRead(d) == kNone) release(local_slot_[d]);
+      }
+    }
+    chunk.slots = next_slot_;
+  }
+
+  std::uint32_t define(std::uint32_t c, NodeId id) {
+    local_chunk_[id] = c;
+    local_slot_[id] = allocate();
+    return local_slot_[id];
+  }
+
+  void load(std::uint32_t c, NodeId base, Chunk& chunk) {
+    Instr ins;
+    const Node& n = g_.node(base);
+    if (n.op == Op::Input) {
+      ins.kind = InstrKind::LoadInput;
+      auto [b, i] = input_where_[n.index];
+      ins.block = b;
+      ins.index = i;
+    } else {
+      ins.kind = InstrKind::LoadTransfer;
+      ins.index = transfer_slot_[base];
+    }
+    ins.dst = define(c, base);
+    chunk.code.push_back(ins);
+  }
+
+  // Outputs of a value are written, and a value read by a later chunk handed over,
+  // right after it is computed.
+  void afterDefinition(NodeId d, Chunk& chunk) {
+    for (std::uint32_t e = out_head_[d]; e != kNone; e = out_entries_[e].next) {
+      Instr st;
+      st.kind = InstrKind::StoreOutput;
+      st.block = out_entries_[e].block;
+      st.index = out_entries_[e].index;
+      st.args[0].slot = local_slot_[d];
+      st.args[0].negated = out_entries_[e].negated;
+      chunk.code.push_back(st);
+    }
+    if (transfer_slot_[d] != kNone) {
+      Instr st;
+      st.kind = InstrKind::StoreTransfer;
+      st.index = transfer_slot_[d];
+      st.args[0].slot = local_slot_[d];
+      chunk.code.push_back(st);
+    }
+  }
+
+  const Graph& g_;
+  const FunctionDefinition& f_;
+  LoweringOptions options_;
+  std::size_t n_;
+
+  std::vector<char> needed_;
+  std::uint32_t needed_count_ = 0;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> input_where_;  // flat input -> (block, index)
+  struct PrologueEntry {
+    std::uint32_t block, index;
+    Ref ref;
+  };
+  std::vector<PrologueEntry> prologue_;  // outputs that are constants or (negated) inputs
+  std::vector<OutputEntry> out_entries_;
+  std::vector<std::uint32_t> out_head_;
+
+  std::vector<Step> steps_;
+  std::uint32_t chunk_count_ = 1;
+  std::uint32_t sincos_pairs_ = 0;
+  std::vector<std::uint32_t> last_chunk_use_, transfer_slot_;
+  std::uint32_t transfer_slots_ = 0;
+
+  // Per chunk being emitted.
+  std::vector<std::uint32_t> last_read_, last_read_chunk_, local_chunk_, local_slot_;
+  std::vector<std::uint32_t> free_;
+  std::uint32_t next_slot_ = 0;
+};
+
+}  // namespace
+
+LoweredFunction lower(const Graph& graph, const FunctionDefinition& function, const LoweringOptions& options) {
+  return Lowerer(graph, function, options).run();
+}
+
+}  // namespace robodiff::codegen::detail

@@ -1,0 +1,76 @@
+// Lowering: from the graph and a function definition to a straight-line program over
+// numbered local slots, the one form both back ends (the C emitter and the
+// interpreter) print or run.
+//
+// What it decides, once for both back ends:
+//  - only the nodes the outputs need are computed;
+//  - constants are literals and negations are operand flags (a Neg node, or a product
+//    with the constant -1, never becomes an instruction: its consumer reads the operand
+//    negated, so the C reads `a - b`, not `a + (-b)`);
+//  - sin(x) and cos(x) of one x become one SinCos instruction;
+//  - inputs are loaded where first used, outputs are stored right after their value is
+//    computed, so a value's slot is free once its last consumer has run;
+//  - slots are reused by liveness (a free list), keeping the working set small;
+//  - optionally the instruction list is cut into chunks of bounded size (one per
+//    translation unit); a value used by a later chunk goes through the work buffer
+//    ("transfer" slots, also reused once their last reader is done).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::codegen::detail {
+
+struct Operand {
+  enum class Kind : std::uint8_t { Slot, Constant, Input };
+  Kind kind = Kind::Slot;
+  bool negated = false;            // Slot and Input only; a Constant carries its sign
+  std::uint32_t slot = 0;          // Slot
+  double value = 0.0;              // Constant
+  std::uint32_t block = 0, index = 0;  // Input (only in output copies: out = +-in)
+};
+
+enum class InstrKind : std::uint8_t {
+  LoadInput,      // slot dst = in[block][index]
+  LoadTransfer,   // slot dst = work[index]
+  Compute,        // slot dst = op(args)
+  SinCos,         // slot dst = sin(args[0]), slot dst2 = cos(args[0])
+  StoreOutput,    // out[block][index] = args[0]
+  StoreTransfer,  // work[index] = args[0]
+};
+
+struct Instr {
+  InstrKind kind = InstrKind::Compute;
+  symbolic::Op op = symbolic::Op::Constant;  // Compute
+  std::uint32_t dst = 0, dst2 = 0;
+  Operand args[3];
+  std::uint32_t block = 0, index = 0;
+};
+
+struct Chunk {
+  std::vector<Instr> code;
+  std::uint32_t slots = 0;       // local slots used (highest slot + 1)
+  std::uint32_t operations = 0;  // Compute + SinCos instructions
+};
+
+struct LoweredFunction {
+  std::vector<Chunk> chunks;        // at least one
+  std::uint32_t transfer_slots = 0; // doubles of work buffer passing values between chunks
+  std::uint32_t needed_nodes = 0;   // graph nodes the outputs reach (constants and inputs included)
+  std::uint32_t operations = 0;
+  std::uint32_t sincos_pairs = 0;
+};
+
+struct LoweringOptions {
+  std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk
+  bool reuse_slots = true;            // false: every value gets a fresh slot (SSA form)
+};
+
+// Expects a definition that passed validate(graph).
+LoweredFunction lower(const symbolic::Graph& graph, const FunctionDefinition& function,
+                      const LoweringOptions& options = {});
+
+}  // namespace robodiff::codegen::detail

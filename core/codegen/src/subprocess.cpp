@@ -1,0 +1,257 @@
+#include "subprocess.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/prctl.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/time.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+
+extern char** environ;
+
+namespace robodiff::codegen::detail {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kOutputCap = 256 * 1024;
+
+struct Running {
+  std::size_t index;
+  pid_t pid;
+  int fd;  // read end of the stdout/stderr pipe; -1 once at end of file
+  Clock::time_point started;
+};
+
+// Starts one process; on failure fills outcome and returns pid -1.
+pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, int* out_fd, ProcessOutcome& outcome) {
+  const std::string path = findProgram(argv.at(0));
+  if (path.empty()) {
+    outcome.state = ProcessOutcome::State::CannotStart;
+    outcome.start_error = "'" + argv[0] + "' not found (not a path, and not in PATH)";
+    return -1;
+  }
+  // Everything the child needs is prepared before fork: after it, only
+  // async-signal-safe calls (the parent may have other threads).
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  int out[2], report[2];
+  if (pipe2(out, O_CLOEXEC) != 0) {
+    outcome.state = ProcessOutcome::State::CannotStart;
+    outcome.start_error = std::string("pipe: ") + std::strerror(errno);
+    return -1;
+  }
+  if (pipe2(report, O_CLOEXEC) != 0) {
+    outcome.state = ProcessOutcome::State::CannotStart;
+    outcome.start_error = std::string("pipe: ") + std::strerror(errno);
+    close(out[0]);
+    close(out[1]);
+    return -1;
+  }
+  const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
+  struct rlimit as_limit;
+  as_limit.rlim_cur = as_limit.rlim_max = static_cast<rlim_t>(limits.address_space_bytes);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
+    if (limits.address_space_bytes > 0) setrlimit(RLIMIT_AS, &as_limit);
+    if (devnull >= 0) dup2(devnull, 0);
+    dup2(out[1], 1);
+    dup2(out[1], 2);
+    execve(path.c_str(), args.data(), environ);
+    int e = errno;
+    (void)!write(report[1], &e, sizeof e);
+    _exit(127);
+  }
+  const int fork_errno = errno;
+  if (devnull >= 0) close(devnull);
+  close(out[1]);
+  close(report[1]);
+  if (pid < 0) {
+    close(out[0]);
+    close(report[0]);
+    outcome.state = ProcessOutcome::State::CannotStart;
+    outcome.start_error = std::string("fork: ") + std::strerror(fork_errno);
+    return -1;
+  }
+  setpgid(pid, pid);  // also from here, so killpg works whoever runs first
+  // The report pipe closes on a successful exec (CLOEXEC) or carries exec's errno.
+  int child_errno = 0;
+  ssize_t got;
+  do got = read(report[0], &child_errno, sizeof child_errno);
+  while (got < 0 && errno == EINTR);
+  close(report[0]);
+  if (got == static_cast<ssize_t>(sizeof child_errno)) {
+    int status;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    close(out[0]);
+    outcome.state = ProcessOutcome::State::CannotStart;
+    outcome.start_error = "cannot execute '" + path + "': " + std::strerror(child_errno);
+    return -1;
+  }
+  fcntl(out[0], F_SETFL, fcntl(out[0], F_GETFL) | O_NONBLOCK);
+  *out_fd = out[0];
+  return pid;
+}
+
+void drain(Running& r, ProcessOutcome& o) {
+  char buf[8192];
+  while (r.fd >= 0) {
+    ssize_t n = read(r.fd, buf, sizeof buf);
+    if (n > 0) {
+      if (o.output.size() < kOutputCap) o.output.append(buf, std::min<std::size_t>(n, kOutputCap - o.output.size()));
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n == 0) {
+      close(r.fd);
+      r.fd = -1;
+    }
+    return;  // EAGAIN: nothing more for now
+  }
+}
+
+// Waits for a process; `block`: wait even if it has not ended. Returns whether reaped.
+bool reap(Running& r, ProcessOutcome& o, bool block) {
+  int status = 0;
+  struct rusage usage {};
+  pid_t got;
+  do got = wait4(r.pid, &status, block ? 0 : WNOHANG, &usage);
+  while (got < 0 && errno == EINTR);
+  if (got != r.pid) return false;
+  o.seconds = std::chrono::duration<double>(Clock::now() - r.started).count();
+  o.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;  // Linux: KiB
+  if (WIFEXITED(status)) {
+    o.state = ProcessOutcome::State::Exited;
+    o.exit_code = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    o.state = ProcessOutcome::State::Signaled;
+    o.signal = WTERMSIG(status);
+  }
+  // Leftover children of the process (its group) do not outlive it.
+  killpg(r.pid, SIGKILL);
+  drain(r, o);
+  if (r.fd >= 0) {
+    close(r.fd);
+    r.fd = -1;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string findProgram(const std::string& name) {
+  if (name.empty()) return {};
+  auto executable = [](const std::string& p) {
+    struct stat st;
+    return stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode) && access(p.c_str(), X_OK) == 0;
+  };
+  if (name.find('/') != std::string::npos) return executable(name) ? name : std::string();
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    std::size_t end = dirs.find(':', start);
+    if (end == std::string::npos) end = dirs.size();
+    std::string dir = dirs.substr(start, end - start);
+    std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
+    if (executable(candidate)) return candidate;
+    start = end + 1;
+  }
+  return {};
+}
+
+std::string commandLine(const std::vector<std::string>& argv) {
+  std::string s;
+  for (const auto& a : argv) {
+    if (!s.empty()) s += ' ';
+    const bool plain = !a.empty() && a.find_first_of(" \t\n'\"\\$`*?;&|<>()") == std::string::npos;
+    if (plain) {
+      s += a;
+    } else {
+      s += '\'';
+      for (char c : a) s += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      s += '\'';
+    }
+  }
+  return s;
+}
+
+std::vector<ProcessOutcome> runProcesses(const std::vector<std::vector<std::string>>& commands,
+                                         const ProcessLimits& limits) {
+  std::vector<ProcessOutcome> outcomes(commands.size());
+  std::vector<Running> running;
+  std::size_t next = 0;
+  bool failed = false;
+  const unsigned jobs = std::max(1u, limits.jobs);
+
+  auto killAll = [&](ProcessOutcome::State why) {
+    for (Running& r : running) {
+      killpg(r.pid, SIGKILL);
+      reap(r, outcomes[r.index], true);
+      outcomes[r.index].state = why;
+    }
+    running.clear();
+  };
+
+  while (true) {
+    while (!failed && next < commands.size() && running.size() < jobs) {
+      if (Clock::now() >= limits.deadline) break;
+      Running r{next, -1, -1, Clock::now()};
+      r.pid = start(commands[next], limits, &r.fd, outcomes[next]);
+      ++next;
+      if (r.pid < 0) {
+        failed = true;
+        break;
+      }
+      running.push_back(r);
+    }
+    if (failed) killAll(ProcessOutcome::State::Cancelled);
+    if (running.empty()) break;
+
+    const auto now = Clock::now();
+    if (now >= limits.deadline) {
+      killAll(ProcessOutcome::State::TimedOut);
+      break;
+    }
+    // Wait for output or the deadline; check for exits at least every 20 ms (a process
+    // may end while a child of it still holds the pipe), every 1 ms once a process has
+    // closed its output (it is about to exit).
+    std::vector<pollfd> fds;
+    for (const Running& r : running)
+      if (r.fd >= 0) fds.push_back({r.fd, POLLIN, 0});
+    const bool exiting = fds.size() < running.size();
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(limits.deadline - now).count();
+    const int timeout_ms = static_cast<int>(std::min<long long>(std::max<long long>(left, 1), exiting ? 1 : 20));
+    if (!fds.empty()) poll(fds.data(), fds.size(), timeout_ms);
+    else usleep(static_cast<useconds_t>(timeout_ms) * 1000);
+
+    for (std::size_t i = 0; i < running.size();) {
+      Running& r = running[i];
+      ProcessOutcome& o = outcomes[r.index];
+      drain(r, o);
+      if (reap(r, o, false)) {
+        if (!o.ok()) failed = true;
+        running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
+      } else {
+        ++i;
+      }
+    }
+  }
+  // Commands never started because of the deadline are timed out, after a failure cancelled.
+  for (std::size_t i = next; i < commands.size(); ++i)
+    outcomes[i].state = failed ? ProcessOutcome::State::Cancelled : ProcessOutcome::State::TimedOut;
+  return outcomes;
+}
+
+}  // namespace robodiff::codegen::detail

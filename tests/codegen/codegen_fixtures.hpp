@@ -1,0 +1,76 @@
+// Graphs, definitions and helpers shared by the code generation tests.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::codegen::testing {
+
+using symbolic::Graph;
+using symbolic::Op;
+
+// A fresh directory under the system's temporary directory, removed on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A random graph using every Op with arguments kept in safe ranges (inputs in [-1, 1]),
+// negations and constants sprinkled in, some sin/cos of one argument; a dense and a
+// sparse output block, plus constant, input and negated-input outputs.
+FunctionDefinition randomFunction(Graph& g, const std::string& name, std::uint32_t seed, int operations);
+
+// Forward kinematics of a planar-ish chain of n revolute joints with offsets: products
+// of rotations by sin/cos of each angle (3x3 rotation and position outputs).
+FunctionDefinition chainFunction(Graph& g, const std::string& name, int joints);
+
+// A Jacobian-like sparse lower-triangular block (n x n) next to a dense vector.
+FunctionDefinition triangularFunction(Graph& g, const std::string& name, int n);
+
+// The ops reachable from a definition's outputs.
+std::vector<bool> opsUsed(const Graph& g, const FunctionDefinition& f);
+
+// Inputs: `knots` points, uniform in [-1, 1], laid out knot by knot per block.
+std::vector<std::vector<double>> randomInputs(const FunctionDefinition& f, std::uint64_t knots, std::uint32_t seed);
+// Zero-filled output blocks for `knots` points.
+std::vector<std::vector<double>> outputBuffers(const FunctionDefinition& f, std::uint64_t knots);
+
+// Pointers to each block, offset to knot `knot`.
+std::vector<const double*> pointers(const std::vector<std::vector<double>>& blocks, const FunctionDefinition& f,
+                                    std::uint64_t knot = 0, bool inputs = true);
+std::vector<double*> pointers(std::vector<std::vector<double>>& blocks, const FunctionDefinition& f,
+                              std::uint64_t knot = 0);
+
+// Graph::evaluate's outputs of knot `knot` of `inputs`, per block.
+std::vector<std::vector<double>> reference(const Graph& g, const FunctionDefinition& f,
+                                           const std::vector<std::vector<double>>& inputs, std::uint64_t knot);
+
+// |a - b| <= tolerance * max(|a|, |b|) (both NaN counts as equal).
+bool closeRelative(double a, double b, double tolerance = 1e-12);
+
+}  // namespace robodiff::codegen::testing
+
+namespace robodiff::codegen::testing {
+
+// Whether `program` is found in PATH (compilers other than cc are optional).
+bool haveProgram(const std::string& program);
+
+// The number of times `needle` occurs in `text`.
+std::size_t countOf(const std::string& text, const std::string& needle);
+
+}  // namespace robodiff::codegen::testing

@@ -1,0 +1,80 @@
+// The interpreter against Graph::evaluate, and its batched entry against the single one.
+#include "robodiff/codegen/interpreter.hpp"
+
+#include <gtest/gtest.h>
+
+#include "codegen_fixtures.hpp"
+
+namespace robodiff::codegen {
+namespace {
+
+using namespace testing;
+
+void expectMatchesReference(const Graph& g, const FunctionDefinition& f, std::uint32_t seed) {
+  const Interpreter interpreter(g, f);
+  std::vector<double> work(interpreter.workSize());
+  const auto in = randomInputs(f, 4, seed);
+  for (std::uint64_t k = 0; k < 4; ++k) {
+    auto out = outputBuffers(f, 1);
+    interpreter.evaluate(pointers(in, f, k).data(), pointers(out, f).data(), work.data());
+    const auto expected = reference(g, f, in, k);
+    for (std::size_t b = 0; b < out.size(); ++b)
+      for (std::size_t i = 0; i < out[b].size(); ++i)
+        ASSERT_TRUE(closeRelative(out[b][i], expected[b][i]))
+            << f.name << " block " << f.outputs[b].name << "[" << i << "]: " << out[b][i] << " vs " << expected[b][i];
+  }
+}
+
+TEST(Interpreter, MatchesGraphEvaluateOnRandomGraphsWithEveryOp) {
+  for (std::uint32_t seed = 1; seed <= 8; ++seed) {
+    Graph g;
+    FunctionDefinition f = randomFunction(g, "random", seed, 250);
+    expectMatchesReference(g, f, seed);
+  }
+}
+
+TEST(Interpreter, MatchesGraphEvaluateOnStructuredGraphs) {
+  Graph g;
+  expectMatchesReference(g, chainFunction(g, "fk", 7), 11);
+  expectMatchesReference(g, triangularFunction(g, "tri", 6), 12);
+}
+
+TEST(Interpreter, BatchedEqualsSingle) {
+  Graph g;
+  FunctionDefinition f = randomFunction(g, "random", 5, 200);
+  const Interpreter interpreter(g, f);
+  std::vector<double> work(interpreter.workSize());
+  for (std::uint64_t n : {1u, 3u, 17u}) {
+    const auto in = randomInputs(f, n, 100 + static_cast<std::uint32_t>(n));
+    auto batched = outputBuffers(f, n);
+    interpreter.evaluateBatch(n, pointers(in, f).data(), pointers(batched, f).data(), work.data());
+    for (std::uint64_t k = 0; k < n; ++k) {
+      auto single = outputBuffers(f, 1);
+      interpreter.evaluate(pointers(in, f, k).data(), pointers(single, f).data(), work.data());
+      for (std::size_t b = 0; b < single.size(); ++b)
+        for (std::size_t i = 0; i < single[b].size(); ++i)
+          ASSERT_EQ(batched[b][k * single[b].size() + i], single[b][i]) << "n=" << n << " knot " << k;
+    }
+  }
+}
+
+TEST(Interpreter, IsCompact) {
+  // A chain of 300 operations needs a handful of slots, and one instruction per
+  // operation plus the loads and stores.
+  Graph g;
+  NodeId acc = g.input(0);
+  for (int i = 0; i < 300; ++i) acc = g.unary(Op::Sin, g.binary(Op::Mul, acc, g.constant(1.0 + 0.001 * (i + 1))));
+  FunctionDefinition f{"chain", {{"x", 1}}, {OutputBlock::dense("y", 1, 1, {acc})}};
+  const Interpreter interpreter(g, f);
+  EXPECT_EQ(interpreter.instructionCount(), 600u + 2u);
+  EXPECT_LE(interpreter.workSize(), 300u + 3u + 2u);  // constants, scratch, two locals
+}
+
+TEST(Interpreter, RejectsABadDefinition) {
+  Graph g;
+  FunctionDefinition f{"f", {{"x", 1}}, {OutputBlock::dense("y", 1, 1, {g.input(2)})}};
+  EXPECT_THROW(Interpreter(g, f), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace robodiff::codegen
