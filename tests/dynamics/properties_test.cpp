@@ -10,19 +10,14 @@
 #include "robodiff/model/robot_generator.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 #include "support/golden.hpp"
+#include "support/robot_cases.hpp"
 
 namespace robodiff {
 namespace {
 
 using testing::matricesAgree;
 
-struct Case {
-  std::string label;
-  GeneratorOptions options;
-  RootJoint root;
-};
-
-void PrintTo(const Case& c, std::ostream* os) { *os << c.label; }
+using Case = testing::RobotCase;
 
 std::vector<Case> cases() {
   GeneratorOptions chain;
@@ -49,7 +44,7 @@ std::vector<Case> cases() {
 class Properties : public ::testing::TestWithParam<Case> {
  protected:
   void SetUp() override {
-    model = loadUrdfString(generateRobotUrdf(GetParam().options), GetParam().root, GetParam().label);
+    model = GetParam().load();
   }
   struct State {
     Eigen::VectorXd q, v, a;

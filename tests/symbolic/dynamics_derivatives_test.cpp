@@ -17,6 +17,7 @@
 #include "robodiff/symbolic/configuration.hpp"
 #include "robodiff/symbolic/differentiation.hpp"
 #include "robodiff/symbolic/tracer.hpp"
+#include "support/robot_cases.hpp"
 #include "support/golden.hpp"
 #include "support/test_paths.hpp"
 
@@ -82,12 +83,7 @@ Eigen::MatrixXd finiteDifferences(const Model& model, Function fn, const Eigen::
   return d;
 }
 
-struct RobotCase {
-  std::string label;
-  GeneratorOptions options;
-  RootJoint root;
-  friend void PrintTo(const RobotCase& c, std::ostream* os) { *os << c.label; }
-};
+using testing::RobotCase;
 
 std::vector<RobotCase> robotCases() {
   GeneratorOptions quadruped;

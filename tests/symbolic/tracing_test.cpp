@@ -8,6 +8,7 @@
 #include "robodiff/model/robot_generator.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 #include "robodiff/symbolic/tracer.hpp"
+#include "support/robot_cases.hpp"
 #include "support/golden.hpp"
 
 namespace robodiff::symbolic {
@@ -15,12 +16,7 @@ namespace {
 
 using testing::matricesAgree;
 
-struct RobotCase {
-  std::string label;
-  GeneratorOptions options;
-  RootJoint root;
-  friend void PrintTo(const RobotCase& c, std::ostream* os) { *os << c.label; }
-};
+using testing::RobotCase;
 
 std::vector<RobotCase> robotCases() {
   GeneratorOptions quadruped;
