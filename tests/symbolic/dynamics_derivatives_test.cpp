@@ -103,7 +103,7 @@ std::vector<RobotCase> robotCases() {
 class DynamicsDerivatives : public ::testing::TestWithParam<RobotCase> {
  protected:
   void SetUp() override {
-    model = loadUrdfString(generateRobotUrdf(GetParam().options), GetParam().root, GetParam().label);
+    model = GetParam().load();
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-1, 1);
     q = randomConfiguration(model, rng);
