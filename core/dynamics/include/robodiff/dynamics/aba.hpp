@@ -6,6 +6,7 @@
 
 #include "robodiff/dynamics/data.hpp"
 #include "robodiff/dynamics/joint.hpp"
+#include "robodiff/dynamics/kinematics.hpp"
 #include "robodiff/dynamics/rnea.hpp"
 #include "robodiff/dynamics/spd_inverse.hpp"
 
@@ -16,19 +17,9 @@ const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>
                    const Eigen::MatrixBase<T>& tau, const std::vector<Force<S>>* fext = nullptr) {
   const int n = model.njoints();
   // Pass 1, root to leaves: kinematics, bias accelerations and forces.
+  forwardKinematics(model, data, q, v);
   for (int j = 0; j < n; ++j) {
-    const Joint& joint = model.joints[j];
-    const int p = joint.parent;
-    data.liMi[j] = jointPlacement<S>(joint, q);
-    Motion<S> vj = jointMotion<S>(joint, v);
-    if (p >= 0) {
-      data.oMi[j] = data.oMi[p] * data.liMi[j];
-      data.v[j] = data.liMi[j].actInv(data.v[p]) + vj;
-    } else {
-      data.oMi[j] = data.liMi[j];
-      data.v[j] = vj;
-    }
-    data.c[j] = data.v[j].cross(vj);
+    data.c[j] = data.v[j].cross(jointMotion<S>(model.joints[j], v));
     const auto& I = asScalar<S>(model.bodies[j]);
     data.Ia[j] = I.matrix();
     data.pA[j] = data.v[j].cross(I * data.v[j]);

@@ -31,18 +31,6 @@ template <class S> InertiaSum<S> worldInertia(const Inertia<double>& body, const
   return out;
 }
 
-// Column k of a joint's motion subspace in the world frame, given the joint's oMi.
-template <class S> Vec6<S> worldSubspaceColumn(const Joint& joint, const SE3<S>& oMi, int k) {
-  if (joint.type == JointType::Revolute && joint.axis_kind != AxisKind::Unaligned) {
-    Vec6<S> col;
-    const auto axis = oMi.rotation.col(detail::axisIndex(joint.axis_kind));
-    col.template tail<3>() = axis;
-    col.template head<3>() = oMi.translation.cross(Vec3<S>(axis));
-    return col;
-  }
-  return oMi.act(subspaceColumn<S>(joint, k)).toVector();
-}
-
 template <class S, class Q> const MatX<S>& crba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q) {
   const int n = model.njoints();
   for (int j = 0; j < n; ++j) {

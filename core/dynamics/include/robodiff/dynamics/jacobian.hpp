@@ -38,8 +38,7 @@ const Matrix6X<S>& computeJointJacobians(const Model& model, Data<S>& data, cons
   forwardKinematics(model, data, q);
   for (int j = 0; j < model.njoints(); ++j) {
     const Joint& joint = model.joints[j];
-    for (int k = 0; k < joint.nv; ++k)
-      data.J.col(joint.idx_v + k) = data.oMi[j].act(subspaceColumn<S>(joint, k)).toVector();
+    for (int k = 0; k < joint.nv; ++k) data.J.col(joint.idx_v + k) = worldSubspaceColumn(joint, data.oMi[j], k);
   }
   return data.J;
 }

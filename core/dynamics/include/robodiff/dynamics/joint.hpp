@@ -90,6 +90,18 @@ template <class S> Motion<S> subspaceColumn(const Joint& joint, int k) {
   return m;
 }
 
+// Column k of a joint's motion subspace in the world frame, given the joint's oMi.
+template <class S> Vec6<S> worldSubspaceColumn(const Joint& joint, const SE3<S>& oMi, int k) {
+  if (joint.type == JointType::Revolute && joint.axis_kind != AxisKind::Unaligned) {
+    Vec6<S> col;
+    const auto axis = oMi.rotation.col(detail::axisIndex(joint.axis_kind));
+    col.template tail<3>() = axis;
+    col.template head<3>() = oMi.translation.cross(Vec3<S>(axis));
+    return col;
+  }
+  return oMi.act(subspaceColumn<S>(joint, k)).toVector();
+}
+
 // S^T f: the generalised force of spatial force f on the joint, component k.
 template <class S> S projectForce(const Joint& joint, const Force<S>& f, int k) {
   switch (joint.type) {
