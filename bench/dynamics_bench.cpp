@@ -123,18 +123,16 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (const Robot& robot : all) {
     auto t = [&](const char* alg) { return reporter.micros[robot.name + "/" + alg]; };
-    auto ratio = [&](double ours, double anchor) {
-      static char buf[4][16];
-      static int slot = 0;
-      char* b = buf[slot++ % 4];
-      if (anchor > 0) std::snprintf(b, 16, "%.2f", ours / anchor);
-      else std::snprintf(b, 16, "-");
-      return b;
+    auto ratio = [](double ours, double anchor) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "%.2f", ours / anchor);
+      return anchor > 0 ? std::string(buf) : std::string("-");
     };
     Anchor anchor = kPinocchio.count(robot.name) ? kPinocchio.at(robot.name) : Anchor{};
     std::printf("| %s | %d | %.3f | %.3f | %.3f | %.3f | %s | %s | %s |\n", robot.name.c_str(), robot.model.nv,
                 t(algorithms[0]), t(algorithms[1]), t(algorithms[2]), t(algorithms[3]),
-                ratio(t("RNEA"), anchor.rnea), ratio(t("CRBA"), anchor.crba), ratio(t("ABA"), anchor.aba));
+                ratio(t("RNEA"), anchor.rnea).c_str(), ratio(t("CRBA"), anchor.crba).c_str(),
+                ratio(t("ABA"), anchor.aba).c_str());
   }
   benchmark::Shutdown();
   return 0;

@@ -97,14 +97,19 @@ TEST(LoadedLibrary, RefusesAnInconsistentDescriptor) {
   EXPECT_NE(no_entry.find("no entry point"), std::string::npos) << no_entry;
 }
 
-TEST(LoadedLibrary, RefusesAWrongFunctionNameOrShape) {
+// The 3-input triangular test function "tri", compiled by gcc -O0 into dir/tri.so.
+fs::path compileTriangular(const TempDir& dir) {
   Graph g;
   FunctionDefinition f = triangularFunction(g, "tri", 3);
-  TempDir dir;
   CompilerOptions o;
   o.compiler = "gcc";
   o.optimization = OptimizationLevel::O0;
-  const fs::path path = compileLibrary(generateLibrary(g, {f}), dir / "tri.so", o).library;
+  return compileLibrary(generateLibrary(g, {f}), dir / "tri.so", o).library;
+}
+
+TEST(LoadedLibrary, RefusesAWrongFunctionNameOrShape) {
+  TempDir dir;
+  const fs::path path = compileTriangular(dir);
 
   FunctionExpectations wrong_name;
   wrong_name.name = "rnea";
@@ -138,12 +143,9 @@ TEST(LoadedLibrary, RefusesWhatIsNotARobodiffLibrary) {
 
 TEST(LoadedLibrary, DescribesAGeneratedFunction) {
   Graph g;
-  FunctionDefinition f = triangularFunction(g, "tri", 3);
+  const FunctionDefinition f = triangularFunction(g, "tri", 3);  // what the library must describe
   TempDir dir;
-  CompilerOptions o;
-  o.compiler = "gcc";
-  o.optimization = OptimizationLevel::O0;
-  LoadedLibrary lib = LoadedLibrary::open(compileLibrary(generateLibrary(g, {f}), dir / "tri.so", o).library);
+  LoadedLibrary lib = LoadedLibrary::open(compileTriangular(dir));
   EXPECT_EQ(lib.generatorVersion(), kGeneratorVersion);
   EXPECT_EQ(lib.descriptor().abi_version, ROBODIFF_ABI_VERSION);
   const robodiff_function_desc& d = lib.function("tri").descriptor();
