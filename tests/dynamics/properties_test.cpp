@@ -101,6 +101,22 @@ TEST_P(Properties, AbaInvertsRnea) {
   }
 }
 
+TEST_P(Properties, MinverseInvertsTheMassMatrix) {
+  // The tree-structured factorisation against a dense LU inverse, and against ABA:
+  // M^-1 (tau - nle) is the forward dynamics.
+  Data<double> data(model);
+  for (int s = 0; s < kSamples; ++s) {
+    State x = randomState(s);
+    const Eigen::MatrixXd M = crba(model, data, x.q);
+    const Eigen::MatrixXd Minv = computeMinverse(model, data, x.q);
+    EXPECT_TRUE(matricesAgree(Minv, M.inverse(), 1e-9));
+    EXPECT_TRUE(matricesAgree(Minv, Minv.transpose(), 0.0));
+    const Eigen::VectorXd tau = rnea(model, data, x.q, x.v, x.a);
+    const Eigen::VectorXd nle = nonLinearEffects(model, data, x.q, x.v);
+    EXPECT_TRUE(matricesAgree(Minv * (tau - nle), aba(model, data, x.q, x.v, tau), 1e-9));
+  }
+}
+
 TEST_P(Properties, AbaWithExternalForcesInvertsRneaWithThem) {
   Data<double> data(model);
   State x = randomState(3);

@@ -8,5 +8,6 @@
 #include "robodiff/dynamics/data.hpp"
 #include "robodiff/dynamics/jacobian.hpp"
 #include "robodiff/dynamics/kinematics.hpp"
+#include "robodiff/dynamics/minv.hpp"
 #include "robodiff/dynamics/regressor.hpp"
 #include "robodiff/dynamics/rnea.hpp"

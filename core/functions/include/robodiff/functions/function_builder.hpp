@@ -1,0 +1,78 @@
+// From a spec and a model to the function that is generated: trace the model function
+// on symbolic scalars, differentiate what the outputs ask for, and assemble a compact
+// graph whose inputs are exactly the function's runtime inputs.
+//
+// How each output is built:
+// - value: the traced model function (fixed inputs are constants and fold away);
+// - Jacobian: symbolic differentiation of the trace (forward or reverse by shape),
+//   except forward dynamics, whose Jacobian is assembled from the analytic identities
+//   (Carpentier & Mansard 2018) d ddq/d(q, v) = -M^-1 d RNEA/d(q, v) at a = ddq and
+//   d ddq/d tau = M^-1: smaller graphs than differentiating ABA itself (measured in
+//   tests/functions/function_builder_test.cpp and written down in core/functions/README.md);
+// - Hessian: sum_i w_i d2 f_i / dx2 with the weights a runtime input block "weights"
+//   (one weight per value entry) or constants.
+// With a floating base, q-derivatives are in the tangent space (nv columns, the golden
+// files' convention): the trace runs at q (+) dq and is differentiated at dq = 0.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/functions/function_spec.hpp"
+#include "robodiff/model/model.hpp"
+#include "robodiff/symbolic/differentiation.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff {
+
+enum class AbaJacobianMethod {
+  Analytic,       // -M^-1 d RNEA / d(q, v) at a = ddq, and M^-1 (the default: smaller)
+  Differentiate,  // differentiate the traced ABA
+};
+
+struct FunctionBuilderOptions {
+  std::string name;  // the C name of the function; empty: the spec's function name
+  AbaJacobianMethod aba_jacobian = AbaJacobianMethod::Analytic;
+  symbolic::JacobianMode jacobian_mode = symbolic::JacobianMode::Automatic;
+  // Node limit of the trace graph; beyond it the build fails with GraphTooLarge.
+  std::size_t node_limit = symbolic::Graph::kDefaultNodeLimit;
+};
+
+// One output block of a built function, as a user reads it.
+struct BuiltOutput {
+  std::string name;  // the block's name in the library: value, jacobian, hessian, ...
+  OutputKind kind = OutputKind::Value;
+  std::vector<std::string> wrt;  // Jacobian / Hessian
+  Layout layout = Layout::Dense;
+  // value: the function's rows x cols (row-major); Jacobian: value entries x tangent
+  // sizes of wrt; Hessian: n x n, dense = the full symmetric matrix, sparse = the
+  // nonzeros of the lower triangle in CSR.
+  int rows = 0, cols = 0;
+  std::uint32_t nnz = 0;  // doubles written
+};
+
+struct BuildTimings {
+  double trace_seconds = 0;           // the model function on symbolic scalars
+  double differentiate_seconds = 0;   // Jacobians and Hessians
+  double assemble_seconds = 0;        // the compact graph of the function's inputs
+};
+
+struct BuiltFunction {
+  std::unique_ptr<symbolic::Graph> graph;  // holds exactly what the outputs need
+  codegen::FunctionDefinition definition;  // input blocks: variable inputs in order, then "weights"
+  std::vector<BuiltOutput> outputs;        // one per spec output, in order
+  int value_rows = 0, value_cols = 0;
+  std::size_t trace_nodes = 0;             // size of the working graph before assembly
+  std::string method;                      // how the derivatives were built, in words
+  BuildTimings timings;
+};
+
+// Throws SpecError when the spec does not fit the model (a fixed input of the wrong
+// size, an unknown frame, a weight count that differs from the value's size) and
+// symbolic::GraphTooLarge past options.node_limit.
+BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options = {});
+
+}  // namespace robodiff

@@ -1,0 +1,55 @@
+// A spec and a model to a loadable library on disk: build the function (trace,
+// differentiate, assemble), emit C, compile it, and describe it in JSON. One call does
+// what `robodiff generate` does; the cache and the build workers use the same steps.
+//
+// Directory layout written by generateFunctionLibrary(out_dir):
+//   <name>.so    the library (abi.h's self-describing descriptor inside)
+//   <name>.json  the description (describeFunction)
+//   src/         the C sources and abi.h, as compiled
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "robodiff/codegen/c_emitter.hpp"
+#include "robodiff/codegen/compiler.hpp"
+#include "robodiff/functions/function_builder.hpp"
+
+namespace robodiff {
+
+struct LibraryOptions {
+  FunctionBuilderOptions builder;
+  codegen::CodegenOptions codegen = defaultCodegenOptions();
+  // Compiler, limits and jobs. The optimisation level, -march=native and -ffast-math
+  // come from the spec's build options (compilerOptionsFor), not from here.
+  codegen::CompilerOptions compiler;
+
+  static codegen::CodegenOptions defaultCodegenOptions();
+};
+
+// The compiler options a spec's build section asks for, on top of `base`.
+codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::CompilerOptions base = {});
+
+struct GeneratedFunctionLibrary {
+  BuiltFunction built;
+  codegen::GeneratedFunctionInfo info;  // operations, parts, ...
+  codegen::CompileReport compile;
+  double emit_seconds = 0;
+  std::uintmax_t source_bytes = 0, library_bytes = 0;
+  std::filesystem::path library, description;
+};
+
+// Builds, emits and compiles into out_dir (created if needed). Throws SpecError,
+// symbolic::GraphTooLarge, codegen::CompileError.
+GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const FunctionSpec& spec,
+                                                 const std::filesystem::path& out_dir,
+                                                 const LibraryOptions& options = {});
+
+// The JSON description of a built function: the model (name, nq, nv, canonical hash),
+// the normalised spec, input blocks, output blocks (shape, layout, nnz, CSR pattern of
+// sparse blocks), how it was built, and the generation figures when given.
+std::string describeFunction(const Model& model, const FunctionSpec& spec, const BuiltFunction& built,
+                             const GeneratedFunctionLibrary* generated = nullptr);
+
+}  // namespace robodiff

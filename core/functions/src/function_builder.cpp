@@ -1,0 +1,321 @@
+#include "robodiff/functions/function_builder.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <set>
+
+#include "robodiff/functions/model_function.hpp"
+#include "robodiff/symbolic/configuration.hpp"
+#include "robodiff/symbolic/hessian.hpp"
+#include "robodiff/symbolic/substitute.hpp"
+#include "robodiff/symbolic/sym.hpp"
+#include "robodiff/symbolic/tracer.hpp"
+
+namespace robodiff {
+
+using symbolic::Graph;
+using symbolic::NodeId;
+using symbolic::Sym;
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool hasFreeFlyer(const Model& model) {
+  for (const Joint& j : model.joints)
+    if (j.type == JointType::FreeFlyer) return true;
+  return false;
+}
+
+// Output block names: value, jacobian, hessian; with several of a kind, named by what
+// they differentiate against (jacobian_q_v), and made unique.
+std::vector<std::string> outputNames(const FunctionSpec& spec) {
+  std::map<OutputKind, int> count;
+  for (const OutputSpec& o : spec.outputs) ++count[o.kind];
+  std::vector<std::string> names;
+  std::set<std::string> used;
+  for (const OutputSpec& o : spec.outputs) {
+    std::string name = toString(o.kind);
+    if (count[o.kind] > 1)
+      for (const std::string& w : o.wrt) name += "_" + w;
+    if (count[o.kind] > 1 && o.layout == Layout::Sparse) name += "_sparse";
+    std::string unique = name;
+    for (int k = 2; used.count(unique); ++k) unique = name + "_" + std::to_string(k);
+    used.insert(unique);
+    names.push_back(unique);
+  }
+  return names;
+}
+
+// The working trace: the model function on symbolic inputs, in a graph that may also
+// hold helper inputs (the tangent displacement dq, ABA's a*) that the assembled
+// function does not have.
+struct Trace {
+  Graph graph;
+  symbolic::Tracer tracer{graph};
+  std::vector<VecX<Sym>> inputs;  // every function input (fixed ones as constants), q moved by dq
+  std::vector<std::string> variable_names;
+  bool tangent = false;           // q-derivatives are taken w.r.t. the block "dq"
+  std::vector<NodeId> value;      // row-major
+  std::vector<NodeId> weights;    // the "weights" block, when a Hessian takes them as input
+};
+
+}  // namespace
+
+BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  const FunctionInfo& info = functionInfo(spec.function);
+  const int frame = resolveFrame(model, spec);
+  const auto [rows, cols] = valueShape(model, spec.function);
+  const int value_size = rows * cols;
+
+  // Checks the parser could not make without the model.
+  for (const InputSpec& in : spec.inputs)
+    if (in.fixed && static_cast<int>(in.fixed->size()) != inputSize(model, in.name))
+      throw SpecError("inputs." + in.name + ".fixed: " + std::to_string(in.fixed->size()) + " numbers, but " +
+                      (model.name.empty() ? "the model" : model.name) + " has " + (in.name == "q" ? "nq" : "nv") +
+                      " = " + std::to_string(inputSize(model, in.name)));
+  bool weights_input = false;
+  std::set<std::string> q_derivatives_needed;
+  for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+    const OutputSpec& o = spec.outputs[k];
+    for (const std::string& w : o.wrt) q_derivatives_needed.insert(w);
+    if (o.kind != OutputKind::Hessian) continue;
+    if (o.fixed_weights && static_cast<int>(o.fixed_weights->size()) != value_size)
+      throw SpecError("outputs[" + std::to_string(k) + "].weights: " + std::to_string(o.fixed_weights->size()) +
+                      " numbers, but the value of " + info.name + " has " + std::to_string(value_size) + " entries");
+    if (!o.fixed_weights) weights_input = true;
+  }
+
+  auto trace = std::make_unique<Trace>();
+  trace->graph.setNodeLimit(options.node_limit);
+  Graph& g = trace->graph;
+  symbolic::Tracer& tracer = trace->tracer;
+  const auto t_trace = std::chrono::steady_clock::now();
+
+  // Function inputs in order; fixed ones are constants.
+  for (const std::string& name : info.inputs) {
+    const InputSpec& in = spec.input(name);
+    if (in.fixed) {
+      trace->inputs.push_back(Eigen::Map<const Eigen::VectorXd>(in.fixed->data(), in.fixed->size()).cast<Sym>());
+    } else {
+      trace->inputs.push_back(tracer.addInputs(name, inputSize(model, name)));
+      trace->variable_names.push_back(name);
+    }
+  }
+  if (weights_input) {
+    const VecX<Sym> w = tracer.addInputs("weights", value_size);
+    trace->weights = tracer.outputs(w);
+  }
+  const int runtime_inputs = static_cast<int>(g.inputCount());
+  // The tangent displacement: only a free-flyer's q-derivatives differ from partials.
+  const bool q_variable = !spec.input("q").fixed;
+  trace->tangent = q_variable && hasFreeFlyer(model) && q_derivatives_needed.count("q");
+  if (trace->tangent) {
+    const VecX<Sym> dq = tracer.addInputs("dq", model.nv);
+    trace->inputs[0] = symbolic::integrateSecondOrder(model, trace->inputs[0], dq);
+  }
+  Data<Sym> data(model);
+  trace->value = tracer.outputs(modelFunctionValue(model, data, spec, frame, trace->inputs));
+  BuiltFunction built;
+  built.timings.trace_seconds = secondsSince(t_trace);
+  built.value_rows = rows;
+  built.value_cols = cols;
+
+  // The tangent columns of named inputs (q -> dq when moving on the manifold).
+  auto wrtIndices = [&](const std::vector<std::string>& names) {
+    std::vector<std::string> blocks;
+    for (const std::string& n : names) blocks.push_back(n == "q" && trace->tangent ? "dq" : n);
+    return tracer.indices(blocks);
+  };
+
+  // ABA's Jacobian from RNEA's: a* is RNEA's acceleration input, replaced by ddq after.
+  bool aba_analytic = spec.function == ModelFunction::Aba && options.aba_jacobian == AbaJacobianMethod::Analytic;
+  bool any_jacobian = false;
+  for (const OutputSpec& o : spec.outputs) any_jacobian = any_jacobian || o.kind == OutputKind::Jacobian;
+  aba_analytic = aba_analytic && any_jacobian;
+
+  const auto t_diff = std::chrono::steady_clock::now();
+  // Per output, the nodes of the trace graph (for the analytic ABA Jacobian: the
+  // pieces, assembled in the final graph below).
+  std::vector<std::vector<NodeId>> trace_outputs(spec.outputs.size());
+  std::vector<symbolic::JacobianMode> modes;
+  std::vector<NodeId> minv, ddq_nodes;
+  std::map<std::string, std::vector<NodeId>> rnea_partials;  // "q"/"v" -> nv x nv row-major, trace graph
+  std::uint32_t a_star_first = 0;
+  if (aba_analytic) {
+    const VecX<Sym> a_star = tracer.addInputs("a_star", model.nv);
+    a_star_first = tracer.block("a_star").first;
+    Data<Sym> d2(model);
+    const std::vector<NodeId> tau_star = tracer.outputs(rnea(model, d2, trace->inputs[0], trace->inputs[1], a_star));
+    // One Jacobian over every q / v block asked for, so its sweeps share their work.
+    std::vector<std::string> partial_names;
+    for (const char* w : {"q", "v"})
+      for (const OutputSpec& o : spec.outputs)
+        if (o.kind == OutputKind::Jacobian && std::count(o.wrt.begin(), o.wrt.end(), w) &&
+            !std::count(partial_names.begin(), partial_names.end(), w))
+          partial_names.push_back(w);
+    if (!partial_names.empty()) {
+      const symbolic::Jacobian j = symbolic::jacobian(g, tau_star, wrtIndices(partial_names), options.jacobian_mode);
+      modes.push_back(j.mode);
+      const int n = model.nv;
+      for (std::size_t b = 0; b < partial_names.size(); ++b) {
+        std::vector<NodeId>& block = rnea_partials[partial_names[b]];
+        for (int r = 0; r < n; ++r)
+          for (int c = 0; c < n; ++c) block.push_back(j(r, static_cast<int>(b) * n + c));
+      }
+    }
+    minv = tracer.outputs(computeMinverse(model, d2, trace->inputs[0]));
+    ddq_nodes = trace->value;
+  }
+  std::vector<symbolic::Hessian> hessians(spec.outputs.size());
+  for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+    const OutputSpec& o = spec.outputs[k];
+    if (o.kind == OutputKind::Value) {
+      trace_outputs[k] = trace->value;
+    } else if (o.kind == OutputKind::Jacobian) {
+      if (aba_analytic) continue;
+      symbolic::Jacobian j = symbolic::jacobian(g, trace->value, wrtIndices(o.wrt), options.jacobian_mode);
+      modes.push_back(j.mode);
+      trace_outputs[k] = std::move(j.entries);
+    } else {
+      hessians[k] = o.fixed_weights
+                        ? symbolic::weightedHessian(g, trace->value, *o.fixed_weights, wrtIndices(o.wrt),
+                                                    options.jacobian_mode)
+                        : symbolic::weightedHessian(g, trace->value, trace->weights, wrtIndices(o.wrt),
+                                                    options.jacobian_mode);
+      modes.push_back(hessians[k].mode);
+      trace_outputs[k] = hessians[k].lower;
+    }
+  }
+  built.timings.differentiate_seconds = secondsSince(t_diff);
+  built.trace_nodes = g.size();
+
+  // Assemble: the runtime inputs keep their indices, dq is 0, a* is ddq.
+  const auto t_assemble = std::chrono::steady_clock::now();
+  built.graph = std::make_unique<Graph>();
+  Graph& out = *built.graph;
+  out.setNodeLimit(options.node_limit);
+  std::vector<NodeId> input_map(g.inputCount(), out.zero());
+  for (int i = 0; i < runtime_inputs; ++i) input_map[i] = out.input(static_cast<std::uint32_t>(i));
+  std::vector<NodeId> value = symbolic::copyCone(g, trace->value, out, input_map);
+
+  std::vector<std::vector<NodeId>> entries(spec.outputs.size());
+  if (aba_analytic) {
+    const int n = model.nv;
+    for (int i = 0; i < n; ++i) input_map[a_star_first + i] = value[i];
+    const std::vector<NodeId> Minv_nodes = symbolic::copyCone(g, minv, out, input_map);
+    auto Minv = [&](int r, int c) { return Sym(out, Minv_nodes[static_cast<std::size_t>(r) * n + c]); };
+    std::map<std::string, std::vector<NodeId>> blocks;  // n x n row-major, final graph
+    blocks["tau"] = Minv_nodes;
+    for (const auto& [w, partial] : rnea_partials) {
+      const std::vector<NodeId> D = symbolic::copyCone(g, partial, out, input_map);
+      std::vector<NodeId> block(static_cast<std::size_t>(n) * n);
+      for (int r = 0; r < n; ++r)
+        for (int c = 0; c < n; ++c) {
+          Sym s(0.0);
+          for (int k = 0; k < n; ++k) s = s - Minv(r, k) * Sym(out, D[static_cast<std::size_t>(k) * n + c]);
+          block[static_cast<std::size_t>(r) * n + c] = s.nodeIn(out);
+        }
+      blocks[w] = std::move(block);
+    }
+    for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+      const OutputSpec& o = spec.outputs[k];
+      if (o.kind != OutputKind::Jacobian) continue;
+      const int c_total = n * static_cast<int>(o.wrt.size());
+      entries[k].resize(static_cast<std::size_t>(n) * c_total);
+      for (int r = 0; r < n; ++r)
+        for (std::size_t b = 0; b < o.wrt.size(); ++b)
+          for (int c = 0; c < n; ++c)
+            entries[k][static_cast<std::size_t>(r) * c_total + b * n + c] =
+                blocks.at(o.wrt[b])[static_cast<std::size_t>(r) * n + c];
+    }
+  }
+  for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+    if (spec.outputs[k].kind == OutputKind::Value) entries[k] = value;
+    else if (!trace_outputs[k].empty()) entries[k] = symbolic::copyCone(g, trace_outputs[k], out, input_map);
+  }
+  const std::vector<std::string> variable_names = trace->variable_names;
+  const bool tangent = trace->tangent;
+  trace.reset();  // the working graph is no longer needed
+
+  // The function's blocks.
+  codegen::FunctionDefinition& def = built.definition;
+  def.name = options.name.empty() ? info.name : options.name;
+  for (const std::string& name : variable_names)
+    def.inputs.push_back({name, static_cast<std::uint32_t>(inputSize(model, name))});
+  if (weights_input) def.inputs.push_back({"weights", static_cast<std::uint32_t>(value_size)});
+  const std::vector<std::string> names = outputNames(spec);
+  for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+    const OutputSpec& o = spec.outputs[k];
+    BuiltOutput b;
+    b.name = names[k];
+    b.kind = o.kind;
+    b.wrt = o.wrt;
+    b.layout = o.layout;
+    int tangent_cols = 0;
+    for (const std::string& w : o.wrt) tangent_cols += w == "q" ? model.nv : inputSize(model, w);
+    if (o.kind == OutputKind::Value) {
+      b.rows = rows, b.cols = cols;
+      def.outputs.push_back(codegen::OutputBlock::dense(b.name, rows, cols, entries[k]));
+    } else if (o.kind == OutputKind::Jacobian) {
+      b.rows = value_size, b.cols = tangent_cols;
+      if (o.layout == Layout::Dense) {
+        def.outputs.push_back(codegen::OutputBlock::dense(b.name, b.rows, b.cols, entries[k]));
+      } else {
+        const symbolic::SparsityPattern p = symbolic::patternOfNodes(b.rows, b.cols, entries[k]);
+        std::vector<NodeId> nz;
+        for (int r = 0; r < p.rows; ++r)
+          for (int e = p.row_ptr[r]; e < p.row_ptr[r + 1]; ++e)
+            nz.push_back(entries[k][static_cast<std::size_t>(r) * b.cols + p.col_idx[e]]);
+        def.outputs.push_back(codegen::OutputBlock::sparse(
+            b.name, b.rows, b.cols, std::vector<std::uint32_t>(p.row_ptr.begin(), p.row_ptr.end()),
+            std::vector<std::uint32_t>(p.col_idx.begin(), p.col_idx.end()), std::move(nz)));
+      }
+    } else {
+      const int n = tangent_cols;
+      b.rows = b.cols = n;
+      auto lower = [&](int i, int j) {
+        if (i < j) std::swap(i, j);
+        return entries[k][static_cast<std::size_t>(i) * (i + 1) / 2 + j];
+      };
+      if (o.layout == Layout::Dense) {
+        std::vector<NodeId> full;
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j) full.push_back(lower(i, j));
+        def.outputs.push_back(codegen::OutputBlock::dense(b.name, n, n, std::move(full)));
+      } else {
+        std::vector<std::uint32_t> row_ptr{0}, col_idx;
+        std::vector<NodeId> nz;
+        for (int i = 0; i < n; ++i) {
+          for (int j = 0; j <= i; ++j)
+            if (!out.isConstant(lower(i, j), 0.0)) col_idx.push_back(j), nz.push_back(lower(i, j));
+          row_ptr.push_back(static_cast<std::uint32_t>(nz.size()));
+        }
+        def.outputs.push_back(
+            codegen::OutputBlock::sparse(b.name, n, n, std::move(row_ptr), std::move(col_idx), std::move(nz)));
+      }
+    }
+    b.nnz = def.outputs.back().size();
+    built.outputs.push_back(std::move(b));
+  }
+  def.validate(out);
+
+  // In words, for descriptions and benchmarks.
+  std::string method = std::string(info.name) + " traced";
+  if (aba_analytic) method += "; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq, M^-1 (analytic)";
+  else if (any_jacobian) method += "; Jacobian by symbolic differentiation";
+  if (!modes.empty()) {
+    method += " (";
+    for (std::size_t k = 0; k < modes.size(); ++k) method += (k ? ", " : "") + std::string(symbolic::toString(modes[k]));
+    method += " mode)";
+  }
+  if (tangent) method += "; q-derivatives in the tangent space";
+  built.method = std::move(method);
+  built.timings.assemble_seconds = secondsSince(t_assemble);
+  return built;
+}
+
+}  // namespace robodiff

@@ -1,0 +1,119 @@
+#include "robodiff/functions/function_library.hpp"
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "robodiff/model/canonical.hpp"
+
+namespace robodiff {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+codegen::CodegenOptions LibraryOptions::defaultCodegenOptions() {
+  codegen::CodegenOptions o;
+  // Parts of ~6,000 operations: compile time grows faster than linearly with the size of
+  // a translation unit (core/codegen/README.md), and parts compile in parallel.
+  o.split_threshold = 6000;
+  return o;
+}
+
+codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::CompilerOptions base) {
+  using codegen::OptimizationLevel;
+  const std::string& o = build.optimization;
+  base.optimization = o == "O0"   ? OptimizationLevel::O0
+                      : o == "O1" ? OptimizationLevel::O1
+                      : o == "O3" ? OptimizationLevel::O3
+                                  : OptimizationLevel::O2;
+  base.native = build.march_native;
+  base.fast_math = build.fast_math;
+  return base;
+}
+
+namespace {
+
+void writeFile(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    f << text;
+    if (!f.flush()) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
+GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const FunctionSpec& spec, const fs::path& out_dir,
+                                                 const LibraryOptions& options) {
+  GeneratedFunctionLibrary result;
+  result.built = buildFunction(model, spec, options.builder);
+  const std::string& name = result.built.definition.name;
+
+  const auto t_emit = std::chrono::steady_clock::now();
+  const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition}, options.codegen);
+  result.emit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_emit).count();
+  result.info = sources.functions.at(0);
+  for (const codegen::SourceFile& s : sources.sources) result.source_bytes += s.text.size();
+
+  fs::create_directories(out_dir);
+  codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
+  if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());
+  compiler.build_dir = out_dir / "src";
+  compiler.keep_build_dir = true;
+  result.library = out_dir / (name + ".so");
+  result.compile = codegen::compileLibrary(sources, result.library, compiler);
+  result.library_bytes = fs::file_size(result.library);
+  result.description = out_dir / (name + ".json");
+  writeFile(result.description, describeFunction(model, spec, result.built, &result) + "\n");
+  return result;
+}
+
+std::string describeFunction(const Model& model, const FunctionSpec& spec, const BuiltFunction& built,
+                             const GeneratedFunctionLibrary* generated) {
+  json d;
+  d["name"] = built.definition.name;
+  d["model"] = {{"name", model.name}, {"nq", model.nq}, {"nv", model.nv}, {"hash", canonicalHash(model)}};
+  d["spec"] = json::parse(normalizedSpecJson(spec));
+  json inputs = json::array();
+  for (const codegen::InputBlock& b : built.definition.inputs) inputs.push_back({{"name", b.name}, {"size", b.size}});
+  d["inputs"] = inputs;
+  json outputs = json::array();
+  for (std::size_t k = 0; k < built.outputs.size(); ++k) {
+    const BuiltOutput& o = built.outputs[k];
+    const codegen::OutputBlock& block = built.definition.outputs[k];
+    json j = {{"name", o.name}, {"kind", toString(o.kind)}, {"rows", o.rows}, {"cols", o.cols}, {"nnz", o.nnz},
+              {"layout", o.layout == Layout::Dense ? "dense" : "sparse"}};
+    if (o.kind != OutputKind::Value) j["wrt"] = o.wrt;
+    if (o.kind == OutputKind::Hessian)
+      j["triangle"] = o.layout == Layout::Dense ? "full symmetric matrix" : "lower triangle";
+    if (block.kind == codegen::OutputKind::Sparse) j["row_ptr"] = block.row_ptr, j["col_idx"] = block.col_idx;
+    outputs.push_back(j);
+  }
+  d["outputs"] = outputs;
+  d["method"] = built.method;
+  d["build"] = {{"trace_nodes", built.trace_nodes},
+                {"function_nodes", built.graph->size()},
+                {"trace_seconds", built.timings.trace_seconds},
+                {"differentiate_seconds", built.timings.differentiate_seconds},
+                {"assemble_seconds", built.timings.assemble_seconds}};
+  if (generated) {
+    json& b = d["build"];
+    b["operations"] = generated->info.operations;
+    b["parts"] = generated->info.parts;
+    b["emit_seconds"] = generated->emit_seconds;
+    b["compile_seconds"] = generated->compile.seconds;
+    b["compiler"] = generated->compile.compiler;
+    b["flags"] = generated->compile.flags;
+    b["peak_compiler_memory_bytes"] = generated->compile.peak_memory_bytes;
+    b["source_bytes"] = generated->source_bytes;
+    b["library_bytes"] = generated->library_bytes;
+    b["library"] = generated->library.filename().string();
+  }
+  return d.dump(2);
+}
+
+}  // namespace robodiff
