@@ -9,5 +9,8 @@ namespace robodiff::cli {
 
 void addComputeCommand(CLI::App& app);
 void addMakeRobotCommand(CLI::App& app);
+void addGenerateCommand(CLI::App& app);  // generate_command.cpp
+void addCheckCommand(CLI::App& app);     // check_command.cpp
+void addBenchCommand(CLI::App& app);     // bench_command.cpp
 
 }  // namespace robodiff::cli

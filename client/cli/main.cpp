@@ -9,6 +9,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   robodiff::cli::addComputeCommand(app);
   robodiff::cli::addMakeRobotCommand(app);
+  robodiff::cli::addGenerateCommand(app);
+  robodiff::cli::addCheckCommand(app);
+  robodiff::cli::addBenchCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
