@@ -136,7 +136,7 @@ class ChunkPrinter {
     bool uses_work = false;
     for (const Instr& ins : chunk.code) {
       if (ins.kind == InstrKind::LoadInput) in_blocks.insert(ins.block);
-      if (ins.kind == InstrKind::StoreOutput) out_blocks.insert(ins.block);
+      if (ins.kind == InstrKind::StoreOutput || ins.kind == InstrKind::ZeroOutput) out_blocks.insert(ins.block);
       if (ins.args[0].kind == Operand::Kind::Input) in_blocks.insert(ins.args[0].block);
       if (ins.kind == InstrKind::LoadTransfer || ins.kind == InstrKind::StoreTransfer) uses_work = true;
     }
@@ -264,6 +264,14 @@ class ChunkPrinter {
         else
           out_ << "  o" << ins.block << "[" << ins.index << "] = " << operand(ins.args[0]) << ";\n";
         break;
+      case InstrKind::ZeroOutput: {
+        const std::uint32_t size = f_.outputs[ins.block].size();
+        if (vector())
+          out_ << "  RD_LANES memset(o" << ins.block << " + l * " << size << ", 0, " << size << " * sizeof(double));\n";
+        else
+          out_ << "  memset(o" << ins.block << ", 0, " << size << " * sizeof(double));\n";
+        break;
+      }
       case InstrKind::StoreTransfer:
         if (vector()) out_ << "  rd_storeu(w + " << ins.index << " * RD_W, " << operand(ins.args[0]) << ");\n";
         else out_ << "  w[" << ins.index << "] = " << operand(ins.args[0]) << ";\n";

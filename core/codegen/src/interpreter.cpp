@@ -139,6 +139,9 @@ class Assembler {
         emit(o.negated ? Code::StoreNeg : Code::Store, 0, ins.block, ins.index, src);
         break;
       }
+      case InstrKind::ZeroOutput:
+        emit(Code::Zero, 0, ins.block, 0, 0);
+        break;
       case InstrKind::LoadTransfer:
       case InstrKind::StoreTransfer:
         throw std::logic_error("interpreter: a split function");
@@ -220,6 +223,7 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
       case Code::Load: fix(ins.dst); break;
       case Code::Store:
       case Code::StoreNeg: fix(ins.c); break;
+      case Code::Zero: break;
       case Code::SinCos: fix(ins.dst); fix(ins.a); fix(ins.b); break;
       default: fix(ins.dst); fix(ins.a); fix(ins.b); fix(ins.c); break;
     }
@@ -242,6 +246,7 @@ void Interpreter::evaluateBatch(std::uint64_t n, const double* const* in, double
   OP(Load, v[i->dst] = in[i->a][knot * in_size[i->a] + i->b])               \
   OP(Store, out[i->a][knot * out_size[i->a] + i->b] = v[i->c])              \
   OP(StoreNeg, out[i->a][knot * out_size[i->a] + i->b] = -v[i->c])          \
+  OP(Zero, std::memset(out[i->a] + knot * out_size[i->a], 0, out_size[i->a] * sizeof(double))) \
   OP(Neg, v[i->dst] = -v[i->a])                                             \
   OP(Sin, v[i->dst] = std::sin(v[i->a]))                                    \
   OP(Cos, v[i->dst] = std::cos(v[i->a]))                                    \

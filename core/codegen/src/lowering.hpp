@@ -8,6 +8,8 @@
 //    with the constant -1, never becomes an instruction: its consumer reads the operand
 //    negated, so the C reads `a - b`, not `a + (-b)`);
 //  - sin(x) and cos(x) of one x become one SinCos instruction;
+//  - an output block with many structural zeros (a dense Jacobian) is cleared at once
+//    (ZeroOutput, a memset) instead of one store per zero;
 //  - inputs are loaded where first used, outputs are stored right after their value is
 //    computed, so a value's slot is free once its last consumer has run;
 //  - slots are reused by liveness (a free list), keeping the working set small;
@@ -40,6 +42,7 @@ enum class InstrKind : std::uint8_t {
   SinCos,         // slot dst = sin(args[0]), slot dst2 = cos(args[0])
   StoreOutput,    // out[block][index] = args[0]
   StoreTransfer,  // work[index] = args[0]
+  ZeroOutput,     // out[block][0 .. size of the block) = 0 (before the block's other stores)
 };
 
 struct Instr {

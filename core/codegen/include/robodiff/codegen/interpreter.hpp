@@ -30,13 +30,13 @@ class Interpreter {
   void evaluateBatch(std::uint64_t n, const double* const* in, double* const* out, double* work) const;
 
   enum class Code : std::uint8_t {
-    Load, Store, StoreNeg, Neg,
+    Load, Store, StoreNeg, Zero, Neg,
     Sin, Cos, SinCos, Tan, Asin, Acos, Atan, Exp, Log, Sqrt, Tanh, Abs,
     Add, Sub, Mul, Div, Atan2, Pow, Min, Max, Select,
     MulAdd, MulSub, SubMul,  // a*b + c, a*b - c, c - a*b (rounded twice, as unfused)
     End,                     // the last instruction
   };
-  // Load: v[dst] = in[a][b]; Store(Neg): out[a][b] = (-)v[c]; SinCos: v[dst] = sin(v[a]),
+  // Load: v[dst] = in[a][b]; Store(Neg): out[a][b] = (-)v[c]; Zero: out[a][..] = 0; SinCos: v[dst] = sin(v[a]),
   // v[b] = cos(v[a]); otherwise v[dst] = op(v[a], v[b], v[c]).
   struct Instruction {
     Code code;
