@@ -1,15 +1,20 @@
-// `robodiff compute`: evaluate one dynamics function in double precision at one state.
+// `robodiff compute`: evaluate one dynamics function in double precision at one state:
+// its value straight from core/dynamics (the original output), or a spec's outputs
+// (value, Jacobians, Hessians) by one of the backends (function_backends.hpp).
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "function_backends.hpp"
+#include "function_options.hpp"
 #include "output_table.hpp"
 #include "robodiff/dynamics/all.hpp"
-#include "robodiff/model/urdf_loader.hpp"
+#include "robodiff/functions/model_function.hpp"
 #include "state_json.hpp"
 
 namespace robodiff::cli {
@@ -41,27 +46,38 @@ std::vector<std::string> velocityLabels(const Model& model) {
 }
 
 struct Options {
-  std::string urdf, function, frame, reference = "LOCAL_WORLD_ALIGNED", state, format = "json";
-  bool floating_base = false;
+  RobotArgs robot;
+  std::string function, spec, frame, reference = "LOCAL_WORLD_ALIGNED", state, format = "json";
+  std::string backend = "reference";
+  bool derivatives = false;
   std::optional<std::uint64_t> random_state;
 };
 
 const std::vector<std::string> kFunctions = {"rnea", "aba",      "crba", "gravity",  "nle",
                                              "fk",   "jacobian", "com",  "regressor"};
 
-void run(const Options& o) {
-  Model model = loadUrdfFile(o.urdf, o.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed);
-  State state;
-  std::string source;
-  if (o.random_state) {
-    state = randomState(model, *o.random_state);
-    source = "random state (seed " + std::to_string(*o.random_state) + ")";
-  } else if (!o.state.empty()) {
-    state = readStateFile(o.state);
-    source = o.state;
-  } else {
-    throw std::invalid_argument("--state FILE or --random-state SEED is required");
-  }
+// The state to evaluate at and its name for messages (the file, or the seed).
+std::pair<State, std::string> loadState(const Options& o, const Model& model, int weight_count = 0) {
+  if (o.random_state)
+    return {randomState(model, *o.random_state, weight_count),
+            "random state (seed " + std::to_string(*o.random_state) + ")"};
+  if (!o.state.empty()) return {readStateFile(o.state), o.state};
+  throw std::invalid_argument("--state FILE or --random-state SEED is required");
+}
+
+// The frame --frame names, checked against the model.
+std::optional<int> namedFrame(const Options& o, const Model& model) {
+  if (o.frame.empty()) return std::nullopt;
+  std::optional<int> frame = model.findFrame(o.frame);
+  if (!frame) throw std::invalid_argument("--frame: no frame named '" + o.frame + "' in " + o.robot.urdf);
+  return frame;
+}
+
+// The value of --function straight from core/dynamics (no --spec, --derivatives or
+// other backend): the original output of `compute`.
+void runDirect(const Options& o) {
+  Model model = loadRobot(o.robot);
+  auto [state, source] = loadState(o, model);
   const std::string& fn = o.function;
   // Check the inputs the function needs in q, v, a, tau order, so the first problem is named.
   static const std::map<std::string, std::vector<std::string>> inputs = {
@@ -71,11 +87,7 @@ void run(const Options& o) {
   for (const std::string& key : inputs.at(fn)) require(state, model, key, fn, source);
   auto need = [&](const char* key) -> const Eigen::VectorXd& { return require(state, model, key, fn, source); };
   const ReferenceFrame reference = parseReferenceFrame(o.reference);
-  std::optional<int> frame;
-  if (!o.frame.empty()) {
-    frame = model.findFrame(o.frame);
-    if (!frame) throw std::invalid_argument("--frame: no frame named '" + o.frame + "' in " + o.urdf);
-  }
+  const std::optional<int> frame = namedFrame(o, model);
   if (fn == "jacobian" && !frame) throw std::invalid_argument("--function jacobian needs --frame NAME");
 
   Data<double> data(model);
@@ -117,7 +129,7 @@ void run(const Options& o) {
                           Eigen::Vector4d(com.x(), com.y(), com.z(), data.mass));
   }
   if (o.format == "table") {
-    std::cout << fn << " of " << (model.name.empty() ? o.urdf : model.name) << " (nq = " << model.nq
+    std::cout << fn << " of " << (model.name.empty() ? o.robot.urdf : model.name) << " (nq = " << model.nq
               << ", nv = " << model.nv << ", " << source << ")\n";
     table.print(std::cout);
   } else {
@@ -127,24 +139,167 @@ void run(const Options& o) {
   }
 }
 
+// --function as a spec: its value and, with --derivatives, the Jacobian w.r.t. all its
+// inputs. compute's "jacobian" is the spec's "frame_jacobian".
+FunctionSpec specForFunction(const Options& o, const Model& model) {
+  const std::string name = o.function == "jacobian" ? "frame_jacobian" : o.function;
+  const FunctionInfo* info = nullptr;
+  for (const FunctionInfo& f : modelFunctions())
+    if (name == f.name) info = &f;
+  if (!info) throw std::invalid_argument("--function " + o.function + " has no spec form");
+  nlohmann::json spec = {{"function", name}, {"outputs", {{{"kind", "value"}}}}};
+  if (o.derivatives) spec["outputs"].push_back({{"kind", "jacobian"}, {"wrt", info->inputs}});
+  if (info->needs_frame) {
+    if (!namedFrame(o, model))
+      throw std::invalid_argument("--function " + o.function + " needs --frame NAME with --derivatives or --backend");
+    spec["frame"] = o.frame;
+  }
+  if (info->function == ModelFunction::FrameJacobian) spec["reference"] = o.reference;
+  return parseFunctionSpec(spec.dump(), "--function " + o.function);
+}
+
+// The spec of --spec or --function, with the outputs compute prints: only the value
+// without --derivatives, every output (and the value first if missing) with it.
+FunctionSpec computedSpec(const Options& o, const Model& model) {
+  FunctionSpec spec = o.spec.empty() ? specForFunction(o, model) : loadFunctionSpec(o.spec);
+  const auto is_value = [](const OutputSpec& out) { return out.kind == OutputKind::Value; };
+  if (!o.derivatives)
+    spec.outputs = {OutputSpec{}};
+  else if (std::none_of(spec.outputs.begin(), spec.outputs.end(), is_value))
+    spec.outputs.insert(spec.outputs.begin(), OutputSpec{});
+  return spec;
+}
+
+// The runtime inputs of `spec` from the state, in the function's block order: the
+// variable inputs, then the Hessian weights if a Hessian takes them at runtime.
+std::vector<Eigen::VectorXd> runtimeInputs(const Options& o, const Model& model, const FunctionSpec& spec,
+                                           const std::string& label) {
+  int weights = 0;
+  for (const OutputSpec& out : spec.outputs)
+    if (out.kind == OutputKind::Hessian && !out.fixed_weights) {
+      const auto [rows, cols] = valueShape(model, spec.function);
+      weights = rows * cols;
+    }
+  auto [state, source] = loadState(o, model, weights);
+  std::vector<Eigen::VectorXd> runtime;
+  for (const std::string& name : functionInfo(spec.function).inputs)
+    if (!spec.input(name).fixed) runtime.push_back(require(state, model, name, label, source));
+  if (weights > 0) runtime.push_back(requireWeights(state, weights, label, source));
+  return runtime;
+}
+
+// Row labels of the value: joints for per-joint vectors and matrices, else indices.
+std::vector<std::string> valueRowLabels(ModelFunction f, const Model& model) {
+  switch (f) {
+    case ModelFunction::FrameJacobian: return {"vx", "vy", "vz", "wx", "wy", "wz"};
+    case ModelFunction::Com: return {"x", "y", "z"};
+    case ModelFunction::Fk: return {};
+    default: return velocityLabels(model);
+  }
+}
+
+// One label per tangent coordinate of the inputs `wrt`, e.g. "q:joint1", "v:joint1".
+std::vector<std::string> tangentLabels(const std::vector<std::string>& wrt, const Model& model) {
+  std::vector<std::string> labels;
+  for (const std::string& w : wrt)
+    for (const std::string& joint : velocityLabels(model)) labels.push_back(w + ":" + joint);
+  return labels;
+}
+
+void printTables(const SpecFunction& f, const std::vector<Eigen::MatrixXd>& out, const Model& model) {
+  const FunctionSpec& spec = f.spec();
+  const std::vector<std::string> value_rows = valueRowLabels(spec.function, model);
+  // Matrices with a column per velocity coordinate: M, M^-1, a frame Jacobian.
+  const bool per_joint_columns = spec.function == ModelFunction::Crba || spec.function == ModelFunction::Minv ||
+                                 spec.function == ModelFunction::FrameJacobian;
+  const std::vector<std::string> value_columns = per_joint_columns ? velocityLabels(model) : std::vector<std::string>{};
+  // Derivative rows are the value's entries: labelled when the value is a vector.
+  const std::vector<std::string> derivative_rows = f.built().value_cols == 1 ? value_rows : std::vector<std::string>{};
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const BuiltOutput& b = f.built().outputs[k];
+    if (k) std::cout << "\n";
+    if (b.kind == OutputKind::Value && b.cols == 1) {
+      Table::vector(b.name, value_rows, out[k].col(0)).print(std::cout);
+    } else if (b.kind == OutputKind::Value) {
+      Table::matrix(b.name, value_rows, out[k], value_columns).print(std::cout);
+    } else {
+      const std::vector<std::string> columns = tangentLabels(b.wrt, model);
+      const std::vector<std::string>& rows = b.kind == OutputKind::Hessian ? columns : derivative_rows;
+      Table::matrix(b.name, rows, out[k], columns).print(std::cout);
+    }
+  }
+}
+
+// A spec's outputs (--spec, --derivatives or --backend) by the chosen backend.
+void runSpec(const Options& o) {
+  const Model model = loadRobot(o.robot);
+  const FunctionSpec spec = computedSpec(o, model);
+  const std::string label = o.function.empty() ? toString(spec.function) : o.function;
+  const std::vector<Eigen::VectorXd> runtime = runtimeInputs(o, model, spec, label);
+  const Backend backend = parseBackend(o.backend);
+  const SpecFunction f(model, spec, {backend});
+  const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
+  if (o.format == "table") {
+    std::cout << label << " of " << (model.name.empty() ? o.robot.urdf : model.name) << " (nq = " << model.nq
+              << ", nv = " << model.nv << ", " << o.backend << " backend)\n";
+    printTables(f, out, model);
+    return;
+  }
+  nlohmann::json j = {{"function", label}, {"backend", o.backend}, {"nq", model.nq}, {"nv", model.nv}};
+  if (functionInfo(spec.function).needs_frame) j["frame"] = spec.frame;
+  if (spec.function == ModelFunction::FrameJacobian) j["reference"] = toString(spec.reference);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const bool vector = spec.outputs[k].kind == OutputKind::Value && out[k].cols() == 1;
+    j[f.built().outputs[k].name] = vector ? toJson(Eigen::VectorXd(out[k].col(0))) : toJson(out[k]);
+  }
+  std::cout << j.dump() << "\n";
+}
+
+void run(const Options& o) {
+  if (o.function.empty() == o.spec.empty()) throw std::invalid_argument("give one of --function NAME and --spec FILE");
+  if (o.spec.empty() && !o.derivatives && o.backend == "reference") runDirect(o);
+  else runSpec(o);
+}
+
 }  // namespace
 
 void addComputeCommand(CLI::App& app) {
   auto options = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("compute", "Evaluate a dynamics function in double precision at one state");
-  cmd->add_option("--urdf", options->urdf, "Robot description (URDF file)")->required();
-  cmd->add_flag("--floating-base", options->floating_base,
-                "Add a free-flyer root joint (q = [x y z qx qy qz qw ...], v = [linear angular ...])");
-  cmd->add_option("--function", options->function, "rnea|aba|crba|gravity|nle|fk|jacobian|com|regressor")
-      ->required()
-      ->check(CLI::IsMember(kFunctions));
-  cmd->add_option("--frame", options->frame, "Frame name (jacobian; restricts fk to one frame)");
-  cmd->add_option("--reference", options->reference, "Jacobian reference frame")
+  CLI::App* cmd = app.add_subcommand("compute", "Evaluate a dynamics function, and its derivatives, at one state");
+  addRobotOptions(*cmd, options->robot);
+  auto* function = cmd->add_option("--function", options->function,
+                                   "rnea|aba|crba|gravity|nle|fk|jacobian|com|regressor (jacobian: the frame "
+                                   "Jacobian, frame_jacobian in a spec)")
+                       ->check(CLI::IsMember(kFunctions));
+  addSpecOption(*cmd, options->spec, false)->excludes(function);
+  cmd->add_option("--frame", options->frame,
+                  "Frame name (--function jacobian; restricts --function fk to one frame, and is required for fk "
+                  "with --derivatives or --backend)");
+  cmd->add_option("--reference", options->reference, "Jacobian reference frame (default LOCAL_WORLD_ALIGNED)")
       ->check(CLI::IsMember({"LOCAL", "WORLD", "LOCAL_WORLD_ALIGNED"}));
-  auto* state = cmd->add_option("--state", options->state, "State JSON {\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}");
-  auto* random = cmd->add_option("--random-state", options->random_state, "Use a random state drawn with this seed");
+  auto* state = cmd->add_option("--state", options->state,
+                                "State JSON {\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}; a spec's "
+                                "Hessian with runtime weights reads \"weights\": [...] (one per value entry)");
+  auto* random = cmd->add_option("--random-state", options->random_state,
+                                 "Use a random state (and random Hessian weights) drawn with this seed");
   state->excludes(random);
+  cmd->add_option("--backend", options->backend,
+                  "reference (default): the value from core/dynamics in double; derivatives from the builder's "
+                  "expression graph evaluated node by node (symbolic::Graph::evaluate: slow, but no code "
+                  "generation or interpreter involved). generated: C code generated and compiled into a "
+                  "temporary directory (removed afterwards), loaded and run. interpreted: the same graph run by "
+                  "the interpreter, nothing compiled")
+      ->check(CLI::IsMember(backendNames()));
+  cmd->add_flag("--derivatives", options->derivatives,
+                "Also print derivatives: with --function, the Jacobian w.r.t. all the function's inputs "
+                "(\"jacobian\", [m][n], columns in input order, q in the tangent space); with --spec, every output "
+                "the spec asks for, Hessians (full symmetric [n][n]) included. Without it only the value is printed");
   cmd->add_option("--format", options->format, "json (default) or table")->check(CLI::IsMember({"json", "table"}));
+  cmd->footer(
+      "Output (json): {\"function\", \"nq\", \"nv\", \"result\"} for --function alone (reference backend, no "
+      "--derivatives); otherwise {\"function\", \"backend\", \"nq\", \"nv\", \"value\" (a vector, or [rows][cols]), "
+      "\"jacobian\", \"hessian\", ...}: one key per output block of the function, named as in the generated "
+      "library (several Jacobians: jacobian_q, jacobian_v, ...).");
   cmd->callback([options] { run(*options); });
 }
 

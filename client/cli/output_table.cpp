@@ -43,6 +43,16 @@ Table Table::matrix(const std::string& title, const std::vector<std::string>& ro
   return t;
 }
 
+Table Table::rows(const std::vector<std::string>& header, const std::vector<bool>& right_aligned) {
+  Table t;
+  t.rows_.push_back(header);
+  t.right_aligned_ = right_aligned;
+  t.right_aligned_.resize(header.size(), false);
+  return t;
+}
+
+void Table::addRow(const std::vector<std::string>& row) { rows_.push_back(row); }
+
 Table Table::placements() {
   Table t;
   t.rows_.push_back({"frame", "x", "y", "z", "R row 1", "", "", "R row 2", "", "", "R row 3", "", ""});
@@ -68,7 +78,8 @@ void Table::print(std::ostream& out) const {
     for (size_t c = 0; c < rows_[r].size(); ++c) {
       const std::string& cell = rows_[r][c];
       std::string pad(width[c] - cell.size(), ' ');
-      line += c == 0 ? cell + pad : "  " + pad + cell;  // labels left, numbers right
+      const bool right = right_aligned_.empty() ? c > 0 : c < right_aligned_.size() && right_aligned_[c];
+      line += (c == 0 ? "" : "  ") + (right ? pad + cell : cell + pad);  // labels left, numbers right
     }
     while (!line.empty() && line.back() == ' ') line.pop_back();
     out << line << "\n";

@@ -17,6 +17,10 @@ class Table {
   // matrices show their first columns and say how many are left out.
   static Table matrix(const std::string& title, const std::vector<std::string>& row_labels, const Eigen::MatrixXd& m,
                       const std::vector<std::string>& column_labels = {});
+  // Free-form rows under a header: text left-aligned, except the columns marked in
+  // `right_aligned` (numbers).
+  static Table rows(const std::vector<std::string>& header, const std::vector<bool>& right_aligned = {});
+  void addRow(const std::vector<std::string>& row);
   // Frame placements: name, translation, rotation rows.
   static Table placements();
   void addPlacement(const std::string& name, const Eigen::Vector3d& p, const Eigen::Matrix3d& R);
@@ -25,6 +29,8 @@ class Table {
 
  private:
   std::vector<std::vector<std::string>> rows_;  // rows_[0] is the header
+  // Per column; empty: the first column left-aligned (labels), the others right (numbers).
+  std::vector<bool> right_aligned_;
   std::string note_;
 };
 

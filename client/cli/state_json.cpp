@@ -44,10 +44,11 @@ State readStateFile(const std::string& path) {
   if (j.contains("v")) s.v = toVector(j["v"], path, "v");
   if (j.contains("a")) s.a = toVector(j["a"], path, "a");
   if (j.contains("tau")) s.tau = toVector(j["tau"], path, "tau");
+  if (j.contains("weights")) s.weights = toVector(j["weights"], path, "weights");
   return s;
 }
 
-State randomState(const Model& model, std::uint64_t seed) {
+State randomState(const Model& model, std::uint64_t seed, int weight_count) {
   std::mt19937_64 rng(seed);
   State s;
   s.q = randomConfiguration(model, rng);
@@ -59,6 +60,7 @@ State randomState(const Model& model, std::uint64_t seed) {
   s.v = uniform(model.nv);
   s.a = uniform(model.nv);
   s.tau = uniform(model.nv);
+  if (weight_count > 0) s.weights = uniform(weight_count);
   return s;
 }
 
@@ -87,6 +89,18 @@ const Eigen::VectorXd& require(const State& state, const Model& model, const std
     }
   }
   return *value;
+}
+
+const Eigen::VectorXd& requireWeights(const State& state, int count, const std::string& what,
+                                      const std::string& source) {
+  if (!state.weights)
+    throw std::invalid_argument(source + ": no \"weights\", needed by " + what + " (one per entry of the value, " +
+                                std::to_string(count) + " numbers)");
+  if (state.weights->size() != count)
+    throw std::invalid_argument(source + ": \"weights\" has " + std::to_string(state.weights->size()) +
+                                " numbers, " + what + " takes " + std::to_string(count) +
+                                " (one per entry of the value)");
+  return *state.weights;
 }
 
 }  // namespace robodiff::cli

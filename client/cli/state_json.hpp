@@ -1,5 +1,6 @@
 // The robot state a CLI command evaluates at: {"q": [...], "v": [...], "a": [...],
-// "tau": [...]} (the golden files' sample shape; keys not needed are ignored).
+// "tau": [...]} (the golden files' sample shape; keys not needed are ignored), and the
+// weights of a weighted Hessian, "weights": [...] (one per entry of the value).
 #pragma once
 
 #include <cstdint>
@@ -13,18 +14,24 @@
 namespace robodiff::cli {
 
 struct State {
-  std::optional<Eigen::VectorXd> q, v, a, tau;
+  std::optional<Eigen::VectorXd> q, v, a, tau, weights;
 };
 
 // Reads a state file; errors name the file, the key and the problem.
 State readStateFile(const std::string& path);
 
-// A random state: q within limits (unit quaternion for a free-flyer), v, a, tau uniform.
-State randomState(const Model& model, std::uint64_t seed);
+// A random state: q within limits (unit quaternion for a free-flyer), v, a, tau uniform
+// in [-1, 1], and `weight_count` weights in [-1, 1] if not 0 (drawn last: q, v, a, tau
+// are the same for every weight_count).
+State randomState(const Model& model, std::uint64_t seed, int weight_count = 0);
 
 // The vector `key` of the state, checked against the model (length, unit quaternion).
 // `what` names the function that needs it, for the message.
 const Eigen::VectorXd& require(const State& state, const Model& model, const std::string& key,
                                const std::string& what, const std::string& source);
+
+// The weights of the state, checked to have `count` entries (the size of the value).
+const Eigen::VectorXd& requireWeights(const State& state, int count, const std::string& what,
+                                      const std::string& source);
 
 }  // namespace robodiff::cli

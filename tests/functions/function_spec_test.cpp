@@ -53,6 +53,13 @@ TEST(FunctionSpec, NormalisedFormIgnoresSpellingButNotMeaning) {
   EXPECT_NE(norm(a), norm(R"({"function": "nle", "outputs": [{"kind": "value"}]})"));
   EXPECT_NE(norm(R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["q", "v"]}]})"),
             norm(R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["v", "q"]}]})"));
+  // A layout is part of the meaning, for Jacobians and Hessians alike.
+  EXPECT_NE(norm(R"({"function": "rnea", "outputs": [{"kind": "hessian", "wrt": ["q"]}]})"),
+            norm(R"({"function": "rnea", "outputs": [{"kind": "hessian", "wrt": ["q"], "layout": "sparse"}]})"));
+  EXPECT_EQ(norm(R"({"function": "rnea", "outputs": [{"kind": "hessian", "wrt": ["q"]}]})"),
+            norm(R"({"function": "rnea", "outputs": [{"kind": "hessian", "wrt": ["q"], "layout": "dense"}]})"));
+  EXPECT_NE(norm(R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["q"]}]})"),
+            norm(R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["q"], "layout": "sparse"}]})"));
 }
 
 struct Bad {

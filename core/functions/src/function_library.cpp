@@ -63,6 +63,7 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
   if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());
   compiler.build_dir = out_dir / "src";
+  fs::remove_all(compiler.build_dir);  // sources of an earlier build must not linger beside these
   compiler.keep_build_dir = true;
   result.library = out_dir / (name + ".so");
   result.compile = codegen::compileLibrary(sources, result.library, compiler);

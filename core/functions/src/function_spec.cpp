@@ -72,6 +72,15 @@ class Parser {
     }
   }
 
+  // "layout": dense (the default) or sparse.
+  Layout layoutOf(const json& output, const std::string& path) const {
+    if (!output.contains("layout")) return Layout::Dense;
+    const std::string layout = string(output["layout"], path + ".layout");
+    if (layout == "sparse") return Layout::Sparse;
+    if (layout != "dense") fail(path + ".layout", "'" + layout + "' is neither dense nor sparse");
+    return Layout::Dense;
+  }
+
   std::string string(const json& value, const std::string& path) const {
     if (!value.is_string()) fail(path, value.dump() + " is not a string");
     return value.get<std::string>();
@@ -167,16 +176,13 @@ class Parser {
         out.kind = OutputKind::Jacobian;
         if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
         out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
-        if (o.contains("layout")) {
-          const std::string layout = string(o["layout"], path + ".layout");
-          if (layout == "sparse") out.layout = Layout::Sparse;
-          else if (layout != "dense") fail(path + ".layout", "'" + layout + "' is neither dense nor sparse");
-        }
+        out.layout = layoutOf(o, path);
       } else if (kind == "hessian") {
-        onlyKeys(o, path, {"kind", "wrt", "weights"});
+        onlyKeys(o, path, {"kind", "wrt", "weights", "layout"});
         out.kind = OutputKind::Hessian;
         if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
         out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
+        out.layout = layoutOf(o, path);
         if (o.contains("weights") && !(o["weights"].is_string() && o["weights"] == "input"))
           out.fixed_weights = numbers(o["weights"], path + ".weights");
       } else {
@@ -258,7 +264,7 @@ std::string normalizedSpecJson(const FunctionSpec& spec) {
   for (const OutputSpec& o : spec.outputs) {
     json out = {{"kind", toString(o.kind)}};
     if (o.kind != OutputKind::Value) out["wrt"] = o.wrt;
-    if (o.kind == OutputKind::Jacobian) out["layout"] = o.layout == Layout::Sparse ? "sparse" : "dense";
+    if (o.kind != OutputKind::Value) out["layout"] = o.layout == Layout::Sparse ? "sparse" : "dense";
     if (o.kind == OutputKind::Hessian) out["weights"] = o.fixed_weights ? json(*o.fixed_weights) : json("input");
     outputs.push_back(out);
   }

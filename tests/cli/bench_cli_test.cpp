@@ -1,0 +1,190 @@
+// `robodiff bench` as a user runs it: real processes on small generated chains
+// (--quick; every build is compiled cold, so the robots are kept small for the test's
+// time), the JSON parsed back. Checks that every row of the table is there with a
+// sane number, that the timed code computed the right thing, and the orderings that
+// hold on any machine however noisy (compiled code beats the interpreter and finite
+// differences by wide margins); the targets themselves are for the README run.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "support/process.hpp"
+#include "support/test_paths.hpp"
+
+namespace robodiff {
+namespace {
+
+using testing::cliPath;
+using testing::runCommand;
+using testing::shellQuote;
+
+namespace fs = std::filesystem;
+
+std::string bench(const fs::path& urdf, const std::string& args) {
+  return shellQuote(cliPath().string()) + " bench --urdf " + shellQuote(urdf.string()) + " " + args;
+}
+
+// A scratch directory with a generated chain of n joints in it, chain<n>.urdf.
+class ChainDir {
+ public:
+  explicit ChainDir(int n)
+      : dir_(fs::temp_directory_path() /
+             ("robodiff-bench-test-" + std::to_string(::getpid()) + "-" + std::to_string(n))),
+        urdf_(dir_ / ("chain" + std::to_string(n) + ".urdf")) {
+    fs::create_directories(dir_);
+    const testing::ProcessResult made = runCommand(shellQuote(cliPath().string()) + " make-robot --chain " +
+                                                   std::to_string(n) + " --out " + shellQuote(urdf_.string()));
+    EXPECT_EQ(made.exit_code, 0) << made.err;
+  }
+  ~ChainDir() { fs::remove_all(dir_); }
+  const fs::path& dir() const { return dir_; }
+  const fs::path& urdf() const { return urdf_; }
+
+ private:
+  fs::path dir_, urdf_;
+};
+
+const nlohmann::json* findRow(const nlohmann::json& rows, const std::string& name) {
+  for (const nlohmann::json& r : rows)
+    if (r.at("name") == name) return &r;
+  return nullptr;
+}
+
+double number(const nlohmann::json& row) {
+  for (const char* key : {"us_per_call", "seconds", "bytes", "count"})
+    if (row.contains(key)) return row.at(key).get<double>();
+  ADD_FAILURE() << "row " << row.at("name") << " has no value: " << row.dump();
+  return NAN;
+}
+
+TEST(BenchCli, QuickJsonHasEveryRowAndSaneFigures) {
+  const ChainDir chain(4);
+  const testing::ProcessResult r = runCommand(bench(chain.urdf(), "--json --quick"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("robot"), "chain4");
+  EXPECT_EQ(j.at("nq"), 4);
+  EXPECT_EQ(j.at("nv"), 4);
+  EXPECT_EQ(j.at("floating_base"), false);
+  const nlohmann::json& rows = j.at("rows");
+
+  const std::vector<std::string> per_call = {"rnea_double",
+                                             "aba_double",
+                                             "rnea_value",
+                                             "rnea_jacobian_dense",
+                                             "rnea_jacobian_sparse",
+                                             "aba_value",
+                                             "aba_jacobian",
+                                             "interpreter_rnea_jacobian_dense",
+                                             "interpreter_aba_jacobian",
+                                             "rnea_fd",
+                                             "batch_rnea_jacobian_dense_1_thread",
+                                             "batch_rnea_jacobian_dense_all_threads",
+                                             "batch_aba_jacobian_1_thread",
+                                             "batch_aba_jacobian_all_threads"};
+  for (const std::string& name : per_call) {
+    const nlohmann::json* row = findRow(rows, name);
+    ASSERT_NE(row, nullptr) << "no row " << name;
+    ASSERT_TRUE(row->contains("us_per_call")) << row->dump();
+    const double t = row->at("us_per_call").get<double>();
+    EXPECT_TRUE(std::isfinite(t) && t > 0) << name << " = " << t;
+    EXPECT_LT(t, 1e5) << name;  // microseconds: a 4-joint chain's function never takes 0.1 s
+    if (row->contains("ratios"))
+      for (const auto& [to, ratio] : row->at("ratios").items()) {
+        EXPECT_NE(findRow(rows, to), nullptr) << name << " has a ratio to an unknown row " << to;
+        EXPECT_TRUE(std::isfinite(ratio.get<double>()) && ratio.get<double>() > 0) << name << " / " << to;
+      }
+  }
+
+  const std::vector<std::string> functions = {"rnea_value", "rnea_jacobian_dense", "rnea_jacobian_sparse", "aba_value",
+                                              "aba_jacobian"};
+  const std::vector<std::string> seconds = {"trace", "differentiate", "assemble", "emit", "compile", "total"};
+  const std::vector<std::string> bytes = {"compiler_peak_memory", "process_peak_memory", "source", "library"};
+  for (const std::string& f : functions) {
+    double parts_sum = 0;
+    for (const std::string& field : seconds) {
+      const nlohmann::json* row = findRow(rows, "build." + f + "." + field);
+      ASSERT_NE(row, nullptr) << "no row build." << f << "." << field;
+      ASSERT_TRUE(row->contains("seconds")) << row->dump();
+      const double s = row->at("seconds").get<double>();
+      EXPECT_TRUE(std::isfinite(s) && s >= 0) << f << "." << field << " = " << s;
+      if (field != "total") parts_sum += s;
+    }
+    EXPECT_GT(number(*findRow(rows, "build." + f + ".compile")), 0) << f;
+    EXPECT_GE(number(*findRow(rows, "build." + f + ".total")) * 1.001 + 1e-3, parts_sum) << f;
+    for (const std::string& field : bytes) {
+      const nlohmann::json* row = findRow(rows, "build." + f + "." + field);
+      ASSERT_NE(row, nullptr) << "no row build." << f << "." << field;
+      ASSERT_TRUE(row->contains("bytes")) << row->dump();
+      EXPECT_GT(row->at("bytes").get<double>(), 0) << f << "." << field;
+    }
+    for (const char* field : {"operations", "parts"}) {
+      const nlohmann::json* row = findRow(rows, "build." + f + "." + field);
+      ASSERT_NE(row, nullptr) << "no row build." << f << "." << field;
+      EXPECT_GE(number(*row), 1) << f << "." << field;
+    }
+  }
+  // One row per figure, no duplicates.
+  std::set<std::string> names;
+  for (const nlohmann::json& row : rows) EXPECT_TRUE(names.insert(row.at("name")).second) << row.at("name");
+  EXPECT_EQ(names.size(), per_call.size() + functions.size() * (seconds.size() + bytes.size() + 2));
+
+  // What was timed computed the right thing.
+  const nlohmann::json& checks = j.at("checks");
+  EXPECT_LT(checks.at("rnea_jacobian_vs_fd").get<double>(), 1e-5);
+  for (const char* name : {"rnea_jacobian_sparse_vs_dense", "rnea_value_vs_double", "aba_value_vs_double",
+                           "interpreter_vs_compiled_rnea_jacobian", "interpreter_vs_compiled_aba_jacobian",
+                           "batch_vs_single_rnea_jacobian_dense", "batch_vs_single_aba_jacobian"})
+    EXPECT_LT(checks.at(name).get<double>(), 1e-9) << name;
+
+  // Orderings that survive a busy machine.
+  auto us = [&](const std::string& name) { return findRow(rows, name)->at("us_per_call").get<double>(); };
+  EXPECT_LT(us("rnea_jacobian_dense"), us("interpreter_rnea_jacobian_dense"));
+  EXPECT_LT(us("aba_jacobian"), us("interpreter_aba_jacobian"));
+  EXPECT_LT(us("rnea_jacobian_dense"), us("rnea_fd"));  // 24 RNEA calls
+  EXPECT_LT(us("rnea_value"), us("rnea_jacobian_dense"));
+  EXPECT_LT(us("aba_value"), us("aba_jacobian"));
+  // Ratios are this row / the named row.
+  const nlohmann::json& jr = findRow(rows, "rnea_jacobian_dense")->at("ratios");
+  EXPECT_NEAR(jr.at("rnea_fd").get<double>(), us("rnea_jacobian_dense") / us("rnea_fd"), 1e-9);
+  // Targets that apply to every robot come with a status; a generated chain has no anchors.
+  const nlohmann::json& interp = *findRow(rows, "interpreter_rnea_jacobian_dense");
+  ASSERT_TRUE(interp.contains("target"));
+  EXPECT_TRUE(interp.at("status") == "PASS" || interp.at("status") == "MISS");
+  EXPECT_FALSE(findRow(rows, "rnea_jacobian_dense")->contains("target"));
+  EXPECT_FALSE(findRow(rows, "rnea_jacobian_dense")->contains("anchor"));
+}
+
+TEST(BenchCli, MarkdownAndKeptLibrariesForASmallChain) {
+  const ChainDir chain(2);
+  const fs::path keep = chain.dir() / "libs";
+  const testing::ProcessResult r =
+      runCommand(bench(chain.urdf(), "--markdown --quick --keep " + shellQuote(keep.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("### chain2 (fixed base, nq = 2, nv = 2)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| generated RNEA + Jacobian [q,v,a], dense |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| rnea_jacobian_sparse |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("|---|"), std::string::npos) << r.out;
+  for (const char* f : {"rnea_value", "rnea_jacobian_dense", "rnea_jacobian_sparse", "aba_value", "aba_jacobian"})
+    EXPECT_TRUE(fs::exists(keep / f / (std::string(f) + ".so"))) << f;
+}
+
+TEST(BenchCli, BadArgumentsFailWithAMessage) {
+  const fs::path urdf = testing::sourceDir() / "examples" / "robots" / "arm7.urdf";
+  testing::ProcessResult r = runCommand(shellQuote(cliPath().string()) + " bench --json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--urdf"), std::string::npos) << r.err;
+  r = runCommand(bench("/nonexistent/robot.urdf", "--quick"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("robot.urdf"), std::string::npos) << r.err;
+  r = runCommand(bench(urdf, "--json --markdown"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
+}  // namespace
+}  // namespace robodiff

@@ -1,0 +1,637 @@
+// Generated function libraries end to end, through the C compiler: spec -> trace ->
+// derivatives -> C -> .so -> LoadedLibrary. The compiled functions equal the
+// interpreter (1e-12), the double reference (values; Jacobians and Hessians against
+// central differences) and Pinocchio's golden derivatives; sparse blocks hold the dense
+// entries; the batched entry point equals the single one bit for bit; split libraries
+// equal unsplit ones; failures (node limit, compiler, spec) are the documented errors
+// and leave no library behind; the description JSON agrees with the library's own
+// descriptor.
+//
+// Compile time, not run time, is what this file spends (gcc at O1 takes ~10 s per 15k
+// operations, at O0 ~1 s): libraries are compiled at O0, except small ones at O1, where
+// gcc with -march=native contracts a*b + c into FMAs, so that the interpreter and the
+// batched entry point are also checked against optimised code; the largest (talos with
+// a free-flyer, 225k operations) with tcc when it is installed. Each library lives in a
+// temporary directory removed at exit; those used by several tests are built once.
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include <Eigen/LU>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "robodiff/codegen/interpreter.hpp"
+#include "robodiff/codegen/loaded_library.hpp"
+#include "robodiff/functions/evaluation.hpp"
+#include "robodiff/functions/function_library.hpp"
+#include "robodiff/functions/model_function.hpp"
+#include "robodiff/functions/reference.hpp"
+#include "robodiff/model/canonical.hpp"
+#include "robodiff/model/urdf_loader.hpp"
+#include "robodiff/symbolic/graph.hpp"
+#include "support/golden.hpp"
+#include "support/test_paths.hpp"
+
+namespace robodiff {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::matricesAgree;
+
+// A fresh directory under the system's temporary directory, removed with everything in it.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "robodiff-function-library-test-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed: " + pattern);
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+const Model& arm7() {
+  static const Model m = loadUrdfFile((testing::sourceDir() / "examples/robots/arm7.urdf").string());
+  return m;
+}
+
+const Model& quadruped() {
+  static const Model m =
+      loadUrdfFile((testing::sourceDir() / "examples/robots/quadruped.urdf").string(), RootJoint::FreeFlyer);
+  return m;
+}
+
+const Model& robot(const std::string& name) { return name == "arm7" ? arm7() : quadruped(); }
+
+// An example spec (examples/specs/NAME.json), to be compiled at `optimization`.
+FunctionSpec exampleSpec(const std::string& name, const std::string& optimization = "O0") {
+  FunctionSpec spec = loadFunctionSpec((testing::sourceDir() / "examples/specs" / (name + ".json")).string());
+  spec.build.optimization = optimization;
+  return spec;
+}
+
+// A generated, compiled and loaded function. The directory outlives the library.
+struct Compiled {
+  TempDir dir;
+  FunctionSpec spec;
+  GeneratedFunctionLibrary generated;
+  std::unique_ptr<codegen::LoadedLibrary> library;
+  std::optional<codegen::CompiledFunction> function;
+
+  const BuiltFunction& built() const { return generated.built; }
+  const codegen::FunctionDefinition& definition() const { return generated.built.definition; }
+};
+
+std::unique_ptr<Compiled> compile(const Model& model, const FunctionSpec& spec, const LibraryOptions& options = {}) {
+  auto c = std::make_unique<Compiled>();
+  c->spec = spec;
+  c->generated = generateFunctionLibrary(model, spec, c->dir.path() / "out", options);
+  c->library = std::make_unique<codegen::LoadedLibrary>(codegen::LoadedLibrary::open(c->generated.library));
+  c->function.emplace(c->library->function(c->definition().name));
+  return c;
+}
+
+// Built once per (robot, spec, optimisation) with the default options and shared by the tests.
+const Compiled& cached(const std::string& robot_name, const std::string& spec_name,
+                       const std::string& optimization = "O0") {
+  static std::map<std::string, std::unique_ptr<Compiled>> cache;
+  std::unique_ptr<Compiled>& slot = cache[robot_name + "/" + spec_name + "/" + optimization];
+  if (!slot) slot = compile(robot(robot_name), exampleSpec(spec_name, optimization));
+  return *slot;
+}
+
+// A program found in PATH, or nothing.
+std::optional<fs::path> findInPath(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  if (!path) return std::nullopt;
+  std::string dirs = path;
+  for (std::size_t start = 0; start <= dirs.size();) {
+    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / program;
+    if (end > start && ::access(candidate.c_str(), X_OK) == 0) return candidate;
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+std::vector<Eigen::VectorXd> evaluateCompiled(const Compiled& c, const std::vector<Eigen::VectorXd>& runtime) {
+  return evaluateBlocks(*c.function, c.definition(), runtime);
+}
+
+// The runtime inputs without the weights block (the function's own inputs).
+std::vector<Eigen::VectorXd> variableInputs(const BuiltFunction& f, const std::vector<Eigen::VectorXd>& runtime) {
+  std::vector<Eigen::VectorXd> v;
+  for (std::size_t b = 0; b < f.definition.inputs.size(); ++b)
+    if (f.definition.inputs[b].name != "weights") v.push_back(runtime[b]);
+  return v;
+}
+
+// ---------------------------------------------------------------------------------------
+// 1. Compiled == interpreted == reference.
+
+struct SpecCase {
+  std::string robot, spec, optimization;
+};
+
+void PrintTo(const SpecCase& c, std::ostream* os) { *os << c.robot << "/" << c.spec << "/" << c.optimization; }
+
+std::vector<SpecCase> specCases() {
+  return {
+      {"arm7", "rnea_jacobian", "O0"},      {"arm7", "aba_jacobian", "O0"},      {"arm7", "rnea_hessian", "O0"},
+      {"arm7", "crba", "O1"},               {"arm7", "fk", "O1"},                {"quadruped", "rnea_jacobian", "O0"},
+      {"quadruped", "aba_jacobian", "O0"},  {"quadruped", "rnea_hessian", "O0"}, {"quadruped", "crba", "O0"},
+  };
+}
+
+class CompiledExampleSpecs : public ::testing::TestWithParam<SpecCase> {};
+
+TEST_P(CompiledExampleSpecs, CompiledEqualsInterpretedEqualsReference) {
+  const Model& model = robot(GetParam().robot);
+  const Compiled& c = cached(GetParam().robot, GetParam().spec, GetParam().optimization);
+  const FunctionSpec& spec = c.spec;
+  const BuiltFunction& f = c.built();
+  ASSERT_EQ(f.outputs.size(), spec.outputs.size());
+  ASSERT_EQ(c.function->descriptor().n_outputs, f.definition.outputs.size());
+  codegen::Interpreter interpreter(*f.graph, f.definition);
+  // Forward dynamics inverts M: rounding differences grow with its condition number.
+  const double value_tolerance = spec.function == ModelFunction::Aba ? 1e-10 : 1e-12;
+
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, spec, seed);
+    const std::vector<Eigen::VectorXd> all = completeInputs(spec, variableInputs(f, runtime));
+    const std::vector<Eigen::VectorXd> compiled = evaluateCompiled(c, runtime);
+    const std::vector<Eigen::VectorXd> interpreted = evaluateBlocks(interpreter, f.definition, runtime);
+    const Eigen::VectorXd value = referenceValue(model, spec, all);
+    for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+      const OutputSpec& o = spec.outputs[k];
+      const BuiltOutput& b = f.outputs[k];
+      const codegen::OutputBlock& block = f.definition.outputs[k];
+      SCOPED_TRACE(b.name);
+      const bool hessian = o.kind == OutputKind::Hessian;
+      const Eigen::MatrixXd got = blockMatrix(block, compiled[k], hessian);
+      ASSERT_EQ(got.rows(), b.rows);
+      ASSERT_EQ(got.cols(), b.cols);
+      EXPECT_TRUE(matricesAgree(got, blockMatrix(block, interpreted[k], hessian), 1e-12)) << "compiled vs interpreted";
+      if (o.kind == OutputKind::Value) {
+        Eigen::MatrixXd expected(b.rows, b.cols);
+        for (int r = 0, i = 0; r < b.rows; ++r)
+          for (int col = 0; col < b.cols; ++col) expected(r, col) = value[i++];
+        EXPECT_TRUE(matricesAgree(got, expected, value_tolerance)) << "compiled vs reference";
+      } else if (o.kind == OutputKind::Jacobian) {
+        EXPECT_TRUE(matricesAgree(got, finiteDifferenceJacobian(model, spec, all, o.wrt), 1e-5))
+            << "compiled vs central differences";
+      } else {
+        const Eigen::VectorXd w =
+            o.fixed_weights ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
+                                  o.fixed_weights->data(), static_cast<Eigen::Index>(o.fixed_weights->size())))
+                            : Eigen::VectorXd(runtime.back());
+        EXPECT_TRUE(matricesAgree(got, finiteDifferenceHessian(model, spec, all, w, o.wrt), 2e-5))
+            << "compiled vs second central differences";
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(ProjectRobots, CompiledExampleSpecs, ::testing::ValuesIn(specCases()),
+                         [](const ::testing::TestParamInfo<SpecCase>& info) {
+                           return info.param.robot + "_" + info.param.spec + "_" + info.param.optimization;
+                         });
+
+// ---------------------------------------------------------------------------------------
+// 2. Compiled against Pinocchio (../shared/golden).
+
+class CompiledGolden : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(CompiledGolden, RneaAndAbaJacobiansMatchPinocchio) {
+  ROBODIFF_REQUIRE_SHARED(shared);
+  const testing::GoldenRobot golden = testing::loadGolden(shared, GetParam());
+  const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
+  ASSERT_EQ(model.nq, golden.nq);
+  ASSERT_EQ(model.nv, golden.nv);
+  const int n = model.nv;
+  // talos_ff's ABA Jacobian is 225k operations: 20 s with gcc at O0, under 1 s with tcc.
+  LibraryOptions options;
+  if (const std::optional<fs::path> tcc = findInPath("tcc"); tcc && model.nv > 20) options.compiler.compiler = *tcc;
+  for (const char* name : {"rnea_jacobian", "aba_jacobian"}) {
+    SCOPED_TRACE(name);
+    const std::unique_ptr<Compiled> c = compile(model, exampleSpec(name), options);
+    SCOPED_TRACE("compiled by " + c->generated.compile.compiler);
+    const bool rnea = c->spec.function == ModelFunction::Rnea;
+    const codegen::FunctionDefinition& def = c->definition();
+    ASSERT_EQ(def.outputs.size(), 2u);
+    ASSERT_EQ(def.outputs[1].rows, static_cast<std::uint32_t>(n));
+    ASSERT_EQ(def.outputs[1].cols, static_cast<std::uint32_t>(3 * n));
+    for (std::size_t s : {std::size_t{0}, std::size_t{7}, std::size_t{13}, std::size_t{19}}) {
+      if (s >= golden.samples.size()) continue;
+      SCOPED_TRACE("sample " + std::to_string(s));
+      const testing::GoldenSample& x = golden.samples[s];
+      const std::vector<Eigen::VectorXd> out = evaluateCompiled(*c, {x.q, x.v, rnea ? x.a : x.tau});
+      const Eigen::MatrixXd J = blockMatrix(def.outputs[1], out[1]);
+      if (rnea) {
+        EXPECT_TRUE(matricesAgree(out[0], x.tau, 1e-9));
+        EXPECT_TRUE(matricesAgree(J.leftCols(n), x.dtau_dq, 1e-9)) << "dtau_dq";
+        EXPECT_TRUE(matricesAgree(J.middleCols(n, n), x.dtau_dv, 1e-9)) << "dtau_dv";
+        EXPECT_TRUE(matricesAgree(J.rightCols(n), x.M, 1e-9)) << "dtau_da = M";
+      } else {
+        EXPECT_TRUE(matricesAgree(out[0], x.ddq, 1e-9));
+        EXPECT_TRUE(matricesAgree(J.leftCols(n), x.dddq_dq, 1e-9)) << "dddq_dq";
+        EXPECT_TRUE(matricesAgree(J.middleCols(n, n), x.dddq_dv, 1e-9)) << "dddq_dv";
+        EXPECT_TRUE(matricesAgree(J.rightCols(n), x.M.inverse(), 1e-9)) << "dddq_dtau = M^-1";
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Pinocchio, CompiledGolden, ::testing::Values("panda", "talos_ff"));
+
+// ---------------------------------------------------------------------------------------
+// 3. Sparse layouts hold exactly the dense entries.
+
+// Entries of `dense` outside the CSR pattern of `block` (mirrored when symmetric_lower)
+// that are not exactly zero.
+int nonzerosOutsidePattern(const codegen::OutputBlock& block, const Eigen::MatrixXd& dense, bool symmetric_lower) {
+  Eigen::MatrixXi in_pattern = Eigen::MatrixXi::Zero(block.rows, block.cols);
+  for (std::uint32_t r = 0; r < block.rows; ++r)
+    for (std::uint32_t k = block.row_ptr[r]; k < block.row_ptr[r + 1]; ++k) {
+      in_pattern(r, block.col_idx[k]) = 1;
+      if (symmetric_lower) in_pattern(block.col_idx[k], r) = 1;
+    }
+  int count = 0;
+  for (Eigen::Index r = 0; r < dense.rows(); ++r)
+    for (Eigen::Index col = 0; col < dense.cols(); ++col)
+      if (!in_pattern(r, col) && dense(r, col) != 0.0) ++count;
+  return count;
+}
+
+TEST(SparseLayout, SparseJacobianEqualsTheDenseOneOnTheQuadruped) {
+  const Model& model = quadruped();
+  const Compiled& dense = cached("quadruped", "rnea_jacobian");
+  const Compiled& sparse = cached("quadruped", "rnea_jacobian_sparse");
+  const codegen::OutputBlock& dblock = dense.definition().outputs[1];
+  const codegen::OutputBlock& sblock = sparse.definition().outputs[1];
+  ASSERT_EQ(sblock.kind, codegen::OutputKind::Sparse);
+  ASSERT_EQ(dblock.kind, codegen::OutputKind::Dense);
+  ASSERT_EQ(sblock.rows, dblock.rows);
+  ASSERT_EQ(sblock.cols, dblock.cols);
+  // A tree: a leg's torques do not depend on another leg's joints.
+  EXPECT_LT(sblock.size(), sblock.rows * sblock.cols);
+  EXPECT_EQ(sparse.function->descriptor().outputs[1].nnz, sblock.size());
+  std::cout << "quadruped d tau/d(q, v, a): " << sblock.size() << " of " << sblock.rows * sblock.cols
+            << " entries structurally nonzero\n";
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, dense.spec, seed);
+    const std::vector<Eigen::VectorXd> d = evaluateCompiled(dense, runtime), s = evaluateCompiled(sparse, runtime);
+    EXPECT_TRUE(matricesAgree(s[0], d[0], 1e-12)) << "values";
+    const Eigen::MatrixXd D = blockMatrix(dblock, d[1]);
+    EXPECT_TRUE(matricesAgree(blockMatrix(sblock, s[1]), D, 1e-12));
+    EXPECT_EQ(nonzerosOutsidePattern(sblock, D, false), 0) << "the dense Jacobian is 0 outside the CSR pattern";
+  }
+}
+
+TEST(SparseLayout, SparseHessianEqualsTheDenseOneOnTheQuadruped) {
+  const Model& model = quadruped();
+  const Compiled& dense = cached("quadruped", "rnea_hessian");
+  const Compiled& sparse = cached("quadruped", "rnea_hessian_sparse");
+  ASSERT_EQ(dense.definition().outputs.size(), 3u);
+  ASSERT_EQ(sparse.definition().outputs.size(), 3u);
+  const codegen::OutputBlock& dblock = dense.definition().outputs[2];
+  const codegen::OutputBlock& sblock = sparse.definition().outputs[2];
+  ASSERT_EQ(dblock.kind, codegen::OutputKind::Dense);
+  ASSERT_EQ(sblock.kind, codegen::OutputKind::Sparse);
+  const std::uint32_t n = dblock.rows;
+  ASSERT_EQ(n, static_cast<std::uint32_t>(model.nv));
+  // Lower triangle only, and fewer still: the legs do not couple.
+  for (std::uint32_t r = 0; r < n; ++r)
+    for (std::uint32_t k = sblock.row_ptr[r]; k < sblock.row_ptr[r + 1]; ++k) ASSERT_LE(sblock.col_idx[k], r);
+  EXPECT_LT(sblock.size(), n * (n + 1) / 2);
+  std::cout << "quadruped sum_i w_i d2 tau_i/dq2: " << sblock.size() << " of " << n * (n + 1) / 2
+            << " lower-triangle entries structurally nonzero\n";
+  // Same input blocks (q, v, a, weights).
+  ASSERT_EQ(sparse.definition().inputs.size(), dense.definition().inputs.size());
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, dense.spec, seed);
+    const std::vector<Eigen::VectorXd> d = evaluateCompiled(dense, runtime), s = evaluateCompiled(sparse, runtime);
+    const Eigen::MatrixXd D = blockMatrix(dblock, d[2]);
+    EXPECT_TRUE(matricesAgree(D, D.transpose(), 0.0)) << "the dense Hessian is symmetric";
+    EXPECT_TRUE(matricesAgree(blockMatrix(sblock, s[2], true), D, 1e-12));
+    EXPECT_EQ(nonzerosOutsidePattern(sblock, D, true), 0) << "the dense Hessian is 0 outside the CSR pattern";
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// 4. The batched entry point equals the single one, bit for bit.
+
+// The quadruped's RNEA Jacobian (the case asked for), and the arm's FK at O1, where
+// gcc contracts into FMAs in both the scalar and the SIMD body.
+class BatchedEvaluation : public ::testing::TestWithParam<SpecCase> {};
+
+TEST_P(BatchedEvaluation, EqualsSingleEvaluationsBitForBit) {
+  const Model& model = robot(GetParam().robot);
+  const Compiled& c = cached(GetParam().robot, GetParam().spec, GetParam().optimization);
+  const codegen::CompiledFunction& f = *c.function;
+  const codegen::FunctionDefinition& def = c.definition();
+  std::cout << "batch width " << f.batchWidth() << ", batch work " << f.batchWorkSize() << " doubles\n";
+  const double sentinel = std::numeric_limits<double>::quiet_NaN();
+  for (std::uint64_t n : {1u, 8u, 13u}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    // Knot k of block b at in[b] + k * size; one extra knot of output that must stay untouched.
+    std::vector<std::vector<Eigen::VectorXd>> knots;
+    std::vector<std::vector<double>> in(def.inputs.size()), out(def.outputs.size());
+    for (std::uint64_t k = 0; k < n; ++k) {
+      knots.push_back(randomRuntimeInputs(model, c.spec, 1000 * n + k));
+      for (std::size_t b = 0; b < in.size(); ++b) in[b].insert(in[b].end(), knots[k][b].begin(), knots[k][b].end());
+    }
+    for (std::size_t j = 0; j < out.size(); ++j) out[j].assign((n + 1) * def.outputs[j].size(), sentinel);
+    std::vector<const double*> in_ptr;
+    std::vector<double*> out_ptr;
+    for (const auto& v : in) in_ptr.push_back(v.data());
+    for (auto& v : out) out_ptr.push_back(v.data());
+    std::vector<double> work(f.batchWorkSize());
+    f.evaluateBatch(n, in_ptr.data(), out_ptr.data(), work.empty() ? nullptr : work.data());
+
+    std::size_t differing = 0, compared = 0;
+    double worst = 0;
+    for (std::uint64_t k = 0; k < n; ++k) {
+      const std::vector<Eigen::VectorXd> single = evaluateCompiled(c, knots[k]);
+      for (std::size_t j = 0; j < out.size(); ++j) {
+        const std::size_t size = def.outputs[j].size();
+        for (std::size_t i = 0; i < size; ++i) {
+          const double batched = out[j][k * size + i], one = single[j][static_cast<Eigen::Index>(i)];
+          ++compared;
+          if (std::memcmp(&batched, &one, sizeof(double)) != 0) {
+            ++differing;
+            worst = std::max(worst, std::abs(batched - one) / std::max(std::abs(one), 1e-12));
+          }
+        }
+      }
+    }
+    EXPECT_EQ(differing, 0u) << "of " << compared << " doubles differ from single evaluation; largest relative "
+                             << "difference " << worst;
+    for (std::size_t j = 0; j < out.size(); ++j) {
+      const std::size_t size = def.outputs[j].size();
+      for (std::size_t i = 0; i < size; ++i)
+        ASSERT_TRUE(std::isnan(out[j][n * size + i])) << "written past knot n - 1 in block " << def.outputs[j].name;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Knots, BatchedEvaluation,
+                         ::testing::Values(SpecCase{"quadruped", "rnea_jacobian", "O0"}, SpecCase{"arm7", "fk", "O1"}),
+                         [](const ::testing::TestParamInfo<SpecCase>& info) {
+                           return info.param.robot + "_" + info.param.spec + "_" + info.param.optimization;
+                         });
+
+// ---------------------------------------------------------------------------------------
+// 5. A split library computes what the unsplit one does.
+
+TEST(SplitLibrary, ManyPartsGiveTheSameValues) {
+  const Model& model = arm7();
+  const FunctionSpec spec = exampleSpec("rnea_jacobian");
+  LibraryOptions split, whole;
+  split.codegen.split_threshold = 500;
+  whole.codegen.split_threshold = 0;
+  const std::unique_ptr<Compiled> a = compile(model, spec, split), b = compile(model, spec, whole);
+  EXPECT_GT(a->generated.info.parts, 1u);
+  EXPECT_EQ(b->generated.info.parts, 1u);
+  EXPECT_GE(a->generated.compile.commands.size(), a->generated.info.parts + 1u)
+      << "the parts are compiled separately, then linked";
+  std::cout << "rnea_jacobian on arm7: " << a->generated.info.operations << " operations, "
+            << a->generated.info.parts << " parts at split_threshold 500, " << a->generated.info.transfer_slots
+            << " transfer slots\n";
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, spec, seed);
+    const std::vector<Eigen::VectorXd> x = evaluateCompiled(*a, runtime), y = evaluateCompiled(*b, runtime);
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t k = 0; k < x.size(); ++k) EXPECT_TRUE(matricesAgree(x[k], y[k], 1e-12)) << "block " << k;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// 6. Errors: each is the documented exception, and no library is left behind.
+
+// Nothing at `out_dir` except, possibly, an empty directory or sources.
+void expectNoLibrary(const fs::path& out_dir, const std::string& name) {
+  EXPECT_FALSE(fs::exists(out_dir / (name + ".so"))) << out_dir / (name + ".so");
+  EXPECT_FALSE(fs::exists(out_dir / (name + ".json"))) << out_dir / (name + ".json");
+}
+
+TEST(LibraryErrors, TheNodeLimitIsAResourceErrorAndNothingIsWritten) {
+  TempDir dir;
+  const fs::path out = dir.path() / "out";
+  LibraryOptions options;
+  options.builder.node_limit = 2000;
+  try {
+    generateFunctionLibrary(quadruped(), exampleSpec("aba_jacobian"), out, options);
+    FAIL() << "no error";
+  } catch (const symbolic::GraphTooLarge& e) {
+    EXPECT_EQ(e.limit(), 2000u);
+    EXPECT_NE(std::string(e.what()).find("2000"), std::string::npos) << e.what();
+  }
+  expectNoLibrary(out, "aba");
+  EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << "the build failed before anything was emitted";
+}
+
+TEST(LibraryErrors, AFailingCompilerIsACompileErrorWithItsMessage) {
+  TempDir dir;
+  const fs::path cc = dir.path() / "fake-cc";
+  std::ofstream(cc) << "#!/bin/sh\necho 'fake compiler failure: boom' >&2\nexit 1\n";
+  fs::permissions(cc, fs::perms::owner_all);
+  const fs::path out = dir.path() / "out";
+  LibraryOptions options;
+  options.compiler.compiler = cc.string();
+  try {
+    generateFunctionLibrary(arm7(), exampleSpec("crba"), out, options);
+    FAIL() << "no error";
+  } catch (const codegen::CompileError& e) {
+    EXPECT_EQ(e.kind(), codegen::CompileError::Kind::CompilerFailed);
+    const std::string what = e.what();
+    EXPECT_TRUE(what.find("fake compiler failure: boom") != std::string::npos ||
+                e.compilerOutput().find("fake compiler failure: boom") != std::string::npos)
+        << what << "\n--- compiler output:\n"
+        << e.compilerOutput();
+  }
+  expectNoLibrary(out, "crba");
+}
+
+TEST(LibraryErrors, SpecsThatDoNotFitTheModelAreSpecErrors) {
+  TempDir dir;
+  {
+    SCOPED_TRACE("fixed inputs of the wrong size");
+    // gravity_compensation fixes v and a to 7 zeros: a 7-joint arm, not the quadruped (nv 18).
+    const fs::path out = dir.path() / "fixed";
+    try {
+      generateFunctionLibrary(quadruped(), exampleSpec("gravity_compensation"), out);
+      FAIL() << "no error";
+    } catch (const SpecError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("inputs.v.fixed"), std::string::npos) << what;
+      EXPECT_NE(what.find("18"), std::string::npos) << what;
+    }
+    expectNoLibrary(out, "rnea");
+  }
+  {
+    SCOPED_TRACE("unknown frame");
+    FunctionSpec spec = exampleSpec("fk");
+    spec.frame = "no_such_frame";
+    const fs::path out = dir.path() / "frame";
+    try {
+      generateFunctionLibrary(arm7(), spec, out);
+      FAIL() << "no error";
+    } catch (const SpecError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("no_such_frame"), std::string::npos) << what;
+      EXPECT_NE(what.find("tool"), std::string::npos) << "lists the frames there are: " << what;
+    }
+    expectNoLibrary(out, "fk");
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// 7. The description JSON agrees with the definition and the library's descriptor.
+
+std::vector<std::uint32_t> array(const std::uint32_t* p, std::size_t n) {
+  return p ? std::vector<std::uint32_t>(p, p + n) : std::vector<std::uint32_t>{};
+}
+
+void checkDescription(const Model& model, const Compiled& c) {
+  const codegen::FunctionDefinition& def = c.definition();
+  const BuiltFunction& built = c.built();
+  const robodiff_function_desc& desc = c.function->descriptor();
+  ASSERT_EQ(c.generated.description, c.dir.path() / "out" / (def.name + ".json"));
+  ASSERT_TRUE(fs::exists(c.generated.description));
+  const json d = json::parse(testing::readFile(c.generated.description));
+
+  EXPECT_EQ(d.at("name"), def.name);
+  EXPECT_EQ(std::string(desc.name), def.name);
+  EXPECT_EQ(d.at("model").at("name"), model.name);
+  EXPECT_EQ(d.at("model").at("nq"), model.nq);
+  EXPECT_EQ(d.at("model").at("nv"), model.nv);
+  EXPECT_EQ(d.at("model").at("hash"), canonicalHash(model));
+  EXPECT_EQ(d.at("model").at("hash").get<std::string>().size(), 64u) << "SHA-256 in hex";
+  EXPECT_EQ(d.at("spec"), json::parse(normalizedSpecJson(c.spec)));
+
+  const json& inputs = d.at("inputs");
+  ASSERT_EQ(inputs.size(), def.inputs.size());
+  ASSERT_EQ(desc.n_inputs, def.inputs.size());
+  for (std::size_t b = 0; b < def.inputs.size(); ++b) {
+    SCOPED_TRACE("input " + def.inputs[b].name);
+    EXPECT_EQ(inputs[b].at("name"), def.inputs[b].name);
+    EXPECT_EQ(inputs[b].at("size"), def.inputs[b].size);
+    EXPECT_EQ(std::string(desc.inputs[b].name), def.inputs[b].name);
+    EXPECT_EQ(desc.inputs[b].size, def.inputs[b].size);
+  }
+  // The runtime inputs: q (nq), v, a (nv), and weights (nv) when the Hessian takes them.
+  EXPECT_EQ(def.inputs.at(0).name, "q");
+  EXPECT_EQ(def.inputs.at(0).size, static_cast<std::uint32_t>(model.nq));
+
+  const json& outputs = d.at("outputs");
+  ASSERT_EQ(outputs.size(), def.outputs.size());
+  ASSERT_EQ(desc.n_outputs, def.outputs.size());
+  for (std::size_t k = 0; k < def.outputs.size(); ++k) {
+    const codegen::OutputBlock& block = def.outputs[k];
+    const BuiltOutput& b = built.outputs[k];
+    const robodiff_output_desc& o = desc.outputs[k];
+    const json& j = outputs[k];
+    SCOPED_TRACE("output " + block.name);
+    EXPECT_EQ(j.at("name"), block.name);
+    EXPECT_EQ(std::string(o.name), block.name);
+    EXPECT_EQ(j.at("kind"), toString(b.kind));
+    EXPECT_EQ(j.at("rows"), block.rows);
+    EXPECT_EQ(j.at("cols"), block.cols);
+    EXPECT_EQ(j.at("nnz"), block.size());
+    EXPECT_EQ(o.rows, block.rows);
+    EXPECT_EQ(o.cols, block.cols);
+    EXPECT_EQ(o.nnz, block.size());
+    EXPECT_EQ(b.nnz, block.size());
+    if (b.kind != OutputKind::Value) {
+      EXPECT_EQ(j.at("wrt"), b.wrt);
+    }
+    if (block.kind == codegen::OutputKind::Sparse) {
+      EXPECT_EQ(j.at("layout"), "sparse");
+      EXPECT_EQ(o.kind, ROBODIFF_OUTPUT_SPARSE);
+      const std::vector<std::uint32_t> row_ptr = array(o.row_ptr, o.rows + 1), col_idx = array(o.col_idx, o.nnz);
+      EXPECT_EQ(j.at("row_ptr").get<std::vector<std::uint32_t>>(), row_ptr);
+      EXPECT_EQ(j.at("col_idx").get<std::vector<std::uint32_t>>(), col_idx);
+      EXPECT_EQ(row_ptr, block.row_ptr);
+      EXPECT_EQ(col_idx, block.col_idx);
+      EXPECT_EQ(row_ptr.back(), o.nnz);
+      if (b.kind == OutputKind::Hessian) {
+        EXPECT_EQ(j.at("triangle"), "lower triangle");
+      }
+    } else {
+      EXPECT_EQ(j.at("layout"), "dense");
+      EXPECT_EQ(o.kind, ROBODIFF_OUTPUT_DENSE);
+      EXPECT_EQ(o.row_ptr, nullptr);
+      EXPECT_EQ(o.col_idx, nullptr);
+      EXPECT_EQ(o.nnz, o.rows * o.cols);
+      EXPECT_FALSE(j.contains("row_ptr"));
+      EXPECT_FALSE(j.contains("col_idx"));
+      if (b.kind == OutputKind::Hessian) {
+        EXPECT_EQ(j.at("triangle"), "full symmetric matrix");
+      }
+    }
+  }
+
+  const json& build = d.at("build");
+  for (const char* seconds : {"trace_seconds", "differentiate_seconds", "assemble_seconds", "emit_seconds"}) {
+    ASSERT_TRUE(build.at(seconds).is_number()) << seconds;
+    EXPECT_GE(build.at(seconds).get<double>(), 0.0) << seconds;
+  }
+  EXPECT_GT(build.at("trace_seconds").get<double>(), 0.0);
+  EXPECT_GT(build.at("compile_seconds").get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(build.at("compile_seconds").get<double>(), c.generated.compile.seconds);
+  EXPECT_EQ(build.at("operations"), c.generated.info.operations);
+  EXPECT_GT(build.at("operations").get<std::uint32_t>(), 0u);
+  EXPECT_EQ(build.at("parts"), c.generated.info.parts);
+  EXPECT_EQ(build.at("trace_nodes"), built.trace_nodes);
+  EXPECT_EQ(build.at("function_nodes"), built.graph->size());
+  EXPECT_EQ(build.at("library"), c.generated.library.filename().string());
+  EXPECT_EQ(build.at("library_bytes"), fs::file_size(c.generated.library));
+  EXPECT_EQ(build.at("flags"), c.generated.compile.flags);
+  EXPECT_NE(std::find(c.generated.compile.flags.begin(), c.generated.compile.flags.end(),
+                      "-" + c.spec.build.optimization),
+            c.generated.compile.flags.end())
+      << "the spec's build.optimization reaches the compiler";
+  EXPECT_EQ(d.at("method"), built.method);
+}
+
+TEST(LibraryDescription, SparseJacobianDescriptionAgreesWithTheDescriptor) {
+  checkDescription(quadruped(), cached("quadruped", "rnea_jacobian_sparse"));
+}
+
+TEST(LibraryDescription, SparseHessianDescriptionAgreesWithTheDescriptor) {
+  checkDescription(quadruped(), cached("quadruped", "rnea_hessian_sparse"));
+}
+
+TEST(LibraryDescription, DenseDescriptionAgreesWithTheDescriptor) {
+  checkDescription(arm7(), cached("arm7", "rnea_hessian"));
+}
+
+}  // namespace
+}  // namespace robodiff
