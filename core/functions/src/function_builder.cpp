@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "robodiff/dynamics/rnea_derivatives.hpp"
 #include "robodiff/functions/model_function.hpp"
 #include "robodiff/symbolic/configuration.hpp"
 #include "robodiff/symbolic/hessian.hpp"
@@ -113,6 +114,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   // The tangent displacement: only a free-flyer's q-derivatives differ from partials.
   const bool q_variable = !spec.input("q").fixed;
   trace->tangent = q_variable && hasFreeFlyer(model) && q_derivatives_needed.count("q");
+  const VecX<Sym> q_plain = trace->inputs[0];  // analytic derivatives are tangent already
   if (trace->tangent) {
     const VecX<Sym> dq = tracer.addInputs("dq", model.nv);
     trace->inputs[0] = symbolic::integrateSecondOrder(model, trace->inputs[0], dq);
@@ -131,22 +133,39 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
     return tracer.indices(blocks);
   };
 
-  // ABA's Jacobian from RNEA's: a* is RNEA's acceleration input, replaced by ddq after.
-  bool aba_analytic = spec.function == ModelFunction::Aba && options.aba_jacobian == AbaJacobianMethod::Analytic;
   bool any_jacobian = false;
   for (const OutputSpec& o : spec.outputs) any_jacobian = any_jacobian || o.kind == OutputKind::Jacobian;
-  aba_analytic = aba_analytic && any_jacobian;
+  const bool rnea_analytic = options.rnea_jacobian == RneaJacobianMethod::Analytic;
+  // ABA's Jacobian from RNEA's partials at a = ddq.
+  const bool aba_analytic =
+      spec.function == ModelFunction::Aba && options.aba_jacobian == AbaJacobianMethod::Analytic && any_jacobian;
 
   const auto t_diff = std::chrono::steady_clock::now();
   // Per output, the nodes of the trace graph (for the analytic ABA Jacobian: the
   // pieces, assembled in the final graph below).
   std::vector<std::vector<NodeId>> trace_outputs(spec.outputs.size());
   std::vector<symbolic::JacobianMode> modes;
-  std::vector<NodeId> minv, ddq_nodes;
-  std::map<std::string, std::vector<NodeId>> rnea_partials;  // "q"/"v" -> nv x nv row-major, trace graph
+  std::vector<NodeId> minv;
+  // "q" / "v" / "a" -> nv x nv row-major partials of RNEA, in the trace graph.
+  std::map<std::string, std::vector<NodeId>> rnea_partials;
+  auto analyticPartials = [&](const VecX<Sym>& a) {
+    Data<Sym> d(model);
+    MatX<Sym> dq, dv, da;
+    computeRneaDerivatives(model, d, q_plain, trace->inputs[1], a, dq, dv, da);
+    rnea_partials["q"] = tracer.outputs(dq);
+    rnea_partials["v"] = tracer.outputs(dv);
+    rnea_partials["a"] = tracer.outputs(da);
+  };
+  bool a_star_used = false;
   std::uint32_t a_star_first = 0;
-  if (aba_analytic) {
+  if (aba_analytic && rnea_analytic) {
+    VecX<Sym> ddq(model.nv);
+    for (int i = 0; i < model.nv; ++i) ddq[i] = Sym(g, trace->value[static_cast<std::size_t>(i)]);
+    analyticPartials(ddq);
+  } else if (aba_analytic) {
+    // RNEA traced with its own acceleration input a*, differentiated, a* := ddq after.
     const VecX<Sym> a_star = tracer.addInputs("a_star", model.nv);
+    a_star_used = true;
     a_star_first = tracer.block("a_star").first;
     Data<Sym> d2(model);
     const std::vector<NodeId> tau_star = tracer.outputs(rnea(model, d2, trace->inputs[0], trace->inputs[1], a_star));
@@ -167,9 +186,14 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
           for (int c = 0; c < n; ++c) block.push_back(j(r, static_cast<int>(b) * n + c));
       }
     }
-    minv = tracer.outputs(computeMinverse(model, d2, trace->inputs[0]));
-    ddq_nodes = trace->value;
+  } else if (spec.function == ModelFunction::Rnea && rnea_analytic && any_jacobian) {
+    analyticPartials(trace->inputs[2]);
   }
+  if (aba_analytic) {
+    Data<Sym> d3(model);
+    minv = tracer.outputs(computeMinverse(model, d3, q_plain));
+  }
+  const bool rnea_from_partials = spec.function == ModelFunction::Rnea && !rnea_partials.empty();
   std::vector<symbolic::Hessian> hessians(spec.outputs.size());
   for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
     const OutputSpec& o = spec.outputs[k];
@@ -177,6 +201,16 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
       trace_outputs[k] = trace->value;
     } else if (o.kind == OutputKind::Jacobian) {
       if (aba_analytic) continue;
+      if (rnea_from_partials) {  // the analytic partials, side by side in wrt order
+        const int n = model.nv, c_total = n * static_cast<int>(o.wrt.size());
+        trace_outputs[k].resize(static_cast<std::size_t>(n) * c_total);
+        for (int r = 0; r < n; ++r)
+          for (std::size_t b = 0; b < o.wrt.size(); ++b)
+            for (int c = 0; c < n; ++c)
+              trace_outputs[k][static_cast<std::size_t>(r) * c_total + b * n + c] =
+                  rnea_partials.at(o.wrt[b])[static_cast<std::size_t>(r) * n + c];
+        continue;
+      }
       symbolic::Jacobian j = symbolic::jacobian(g, trace->value, wrtIndices(o.wrt), options.jacobian_mode);
       modes.push_back(j.mode);
       trace_outputs[k] = std::move(j.entries);
@@ -205,12 +239,14 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   std::vector<std::vector<NodeId>> entries(spec.outputs.size());
   if (aba_analytic) {
     const int n = model.nv;
-    for (int i = 0; i < n; ++i) input_map[a_star_first + i] = value[i];
+    if (a_star_used)
+      for (int i = 0; i < n; ++i) input_map[a_star_first + i] = value[i];
     const std::vector<NodeId> Minv_nodes = symbolic::copyCone(g, minv, out, input_map);
     auto Minv = [&](int r, int c) { return Sym(out, Minv_nodes[static_cast<std::size_t>(r) * n + c]); };
     std::map<std::string, std::vector<NodeId>> blocks;  // n x n row-major, final graph
     blocks["tau"] = Minv_nodes;
     for (const auto& [w, partial] : rnea_partials) {
+      if (w == "a") continue;
       const std::vector<NodeId> D = symbolic::copyCone(g, partial, out, input_map);
       std::vector<NodeId> block(static_cast<std::size_t>(n) * n);
       for (int r = 0; r < n; ++r)
@@ -305,7 +341,9 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
 
   // In words, for descriptions and benchmarks.
   std::string method = std::string(info.name) + " traced";
-  if (aba_analytic) method += "; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq, M^-1 (analytic)";
+  const char* partials = rnea_analytic ? "analytic RNEA derivatives" : "differentiated RNEA";
+  if (aba_analytic) method += std::string("; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq (") + partials + "), M^-1";
+  else if (rnea_from_partials) method += "; Jacobian from analytic RNEA derivatives (Carpentier-Mansard)";
   else if (any_jacobian) method += "; Jacobian by symbolic differentiation";
   if (!modes.empty()) {
     method += " (";

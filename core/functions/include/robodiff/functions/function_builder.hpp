@@ -33,9 +33,15 @@ enum class AbaJacobianMethod {
   Differentiate,  // differentiate the traced ABA
 };
 
+enum class RneaJacobianMethod {
+  Analytic,       // dynamics/rnea_derivatives.hpp traced (the default: smaller)
+  Differentiate,  // reverse/forward-mode differentiation of the traced RNEA
+};
+
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
   AbaJacobianMethod aba_jacobian = AbaJacobianMethod::Analytic;
+  RneaJacobianMethod rnea_jacobian = RneaJacobianMethod::Analytic;  // also the partials ABA's uses
   symbolic::JacobianMode jacobian_mode = symbolic::JacobianMode::Automatic;
   // Node limit of the trace graph; beyond it the build fails with GraphTooLarge.
   std::size_t node_limit = symbolic::Graph::kDefaultNodeLimit;

@@ -1,0 +1,153 @@
+// Analytic partial derivatives of inverse dynamics: d tau/dq, d tau/dv, d tau/da = M,
+// in O(n d) (d: depth of the tree), after Carpentier & Mansard (RSS 2018). Derived here
+// in the world frame, with every 6-vector as [linear; angular] and S_c the world-frame
+// subspace column of velocity coordinate c, whose joint is J (parent joint p):
+//
+//   d v_k / d q_c = S_c x (v_k - v_p),  d a_k / d q_c = S_c x (a_k - a_p) - (S_c x v_p) x (v_k - v_p)
+//   for every body k supported by J. Summed over a subtree K of J, the forces' derivative
+//   is  S_c x* F_K - Y_K xi_c - B_K w_c,  w_c = S_c x v_p,  xi_c = S_c x a_p - w_c x v_p,
+//   with Y_K the composite inertia and B_K = sum_k (v_k x*) I_k - I_k (v_k x) + (I_k v_k x-bar*)
+//   the composite "Coriolis" matrix (x-bar*: w -> w x* h). Then, for a row i whose joint
+//   is in J's subtree (the S_i change cancels the S_c x* F term):
+//     d tau_i/d q_c = -(Y_i S_i) . xi_c - (B_i^T S_i) . w_c
+//     d tau_i/d v_c =  (B_i^T S_i) . S_c - (Y_i S_i) . zeta_c,  zeta_c = S_c x (v_p + v_J)
+//     d tau_i/d a_c =  (Y_i S_i) . S_c
+//   and for a row r of a strict ancestor of J: S_r . (S_c x* F_J - Y_J xi_c - B_J w_c),
+//   S_r . (B_J S_c - Y_J zeta_c) and S_r . (Y_J S_c).
+// The q-derivative of a free-flyer is in the tangent space (the golden files'
+// convention). Branch-free on values, so symbolic scalars trace it unchanged: this is
+// what generated RNEA and ABA Jacobians are built from (core/functions/README.md).
+#pragma once
+
+#include <vector>
+
+#include "robodiff/dynamics/crba.hpp"
+#include "robodiff/dynamics/rnea.hpp"
+
+namespace robodiff {
+
+namespace detail {
+
+template <class S> Mat6<S> inertiaMatrix(const InertiaSum<S>& I) {
+  Mat6<S> m = Mat6<S>::Zero();
+  for (int k = 0; k < 3; ++k) m(k, k) = I.mass;
+  m.template topRightCorner<3, 3>() = -skew(I.h);
+  m.template bottomLeftCorner<3, 3>() = skew(I.h);
+  m.template bottomRightCorner<3, 3>() = I.rotational;
+  return m;
+}
+
+// v x* f as a matrix acting on f.
+template <class S> Mat6<S> forceCrossMatrix(const Motion<S>& v) {
+  Mat6<S> m = Mat6<S>::Zero();
+  m.template topLeftCorner<3, 3>() = skew(v.angular);
+  m.template bottomRightCorner<3, 3>() = skew(v.angular);
+  m.template bottomLeftCorner<3, 3>() = skew(v.linear);
+  return m;
+}
+
+// w -> w x* h as a matrix acting on w.
+template <class S> Mat6<S> forceBarCrossMatrix(const Force<S>& h) {
+  Mat6<S> m = Mat6<S>::Zero();
+  m.template topRightCorner<3, 3>() = -skew(h.linear);
+  m.template bottomLeftCorner<3, 3>() = -skew(h.linear);
+  m.template bottomRightCorner<3, 3>() = -skew(h.angular);
+  return m;
+}
+
+template <class S> S pair(const Motion<S>& m, const Force<S>& f) { return m.linear.dot(f.linear) + m.angular.dot(f.angular); }
+
+}  // namespace detail
+
+// The three nv x nv partials of rnea(model, data, q, v, a) (tau itself is data.tau).
+template <class S, class Q, class V, class A>
+void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
+                            const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a, MatX<S>& dtau_dq,
+                            MatX<S>& dtau_dv, MatX<S>& dtau_da) {
+  using detail::pair;
+  const int n = model.njoints(), nv = model.nv;
+  std::vector<Motion<S>> ov(n), oa(n);
+  std::vector<Force<S>> oF(n);
+  std::vector<InertiaSum<S>> oY(n);
+  std::vector<Mat6<S>> oB(n);
+  const Motion<S> a0 = gravityAcceleration<S>(model);
+  auto column = [&](int c) { return Motion<S>::fromVector(data.J.col(c)); };
+
+  // Forward: world-frame placements, subspace columns, velocities, accelerations, and
+  // each body's force, inertia and B matrix.
+  for (int j = 0; j < n; ++j) {
+    const Joint& joint = model.joints[j];
+    data.liMi[j] = jointPlacement<S>(joint, q);
+    data.oMi[j] = joint.parent >= 0 ? data.oMi[joint.parent] * data.liMi[j] : data.liMi[j];
+    Motion<S> vrel, arel;
+    for (int k = 0; k < joint.nv; ++k) {
+      const int c = joint.idx_v + k;
+      data.J.col(c) = worldSubspaceColumn(joint, data.oMi[j], k);
+      const Motion<S> s = column(c);
+      vrel += Motion<S>{s.linear * v[c], s.angular * v[c]};
+      arel += Motion<S>{s.linear * a[c], s.angular * a[c]};
+    }
+    const Motion<S> vp = joint.parent >= 0 ? ov[joint.parent] : Motion<S>::Zero();
+    const Motion<S> ap = joint.parent >= 0 ? oa[joint.parent] : a0;
+    ov[j] = vp + vrel;
+    oa[j] = ap + arel + ov[j].cross(vrel);
+    oY[j] = worldInertia(model.bodies[j], data.oMi[j]);
+    const Force<S> h = oY[j] * ov[j];
+    oF[j] = oY[j] * oa[j] + ov[j].cross(h);
+    // (v x*) I - I (v x) = X + X^T with X = (v x*) I, since (v x*)^T = -(v x) and I is
+    // symmetric: one 6 x 6 product instead of two.
+    const Mat6<S> X = detail::forceCrossMatrix(ov[j]) * detail::inertiaMatrix(oY[j]);
+    oB[j] = X + X.transpose() + detail::forceBarCrossMatrix(h);
+  }
+  // Backward: composites over subtrees.
+  for (int j = n - 1; j > 0; --j) {
+    const int p = model.joints[j].parent;
+    if (p < 0) continue;
+    oY[p] += oY[j];
+    oF[p] += oF[j];
+    oB[p] += oB[j];
+  }
+  // Per row i: P_i = Y_i S_i and Q_i = B_i^T S_i (B_i, Y_i: composites of i's joint).
+  std::vector<Force<S>> P(nv), Qf(nv);
+  for (int j = 0; j < n; ++j)
+    for (int k = 0; k < model.joints[j].nv; ++k) {
+      const int i = model.joints[j].idx_v + k;
+      P[i] = oY[j] * column(i);
+      Qf[i] = Force<S>::fromVector(oB[j].transpose() * data.J.col(i));
+    }
+  dtau_dq = MatX<S>::Zero(nv, nv);
+  dtau_dv = MatX<S>::Zero(nv, nv);
+  dtau_da = MatX<S>::Zero(nv, nv);
+  for (int J = 0; J < n; ++J) {
+    const Joint& joint = model.joints[J];
+    const Motion<S> vp = joint.parent >= 0 ? ov[joint.parent] : Motion<S>::Zero();
+    const Motion<S> ap = joint.parent >= 0 ? oa[joint.parent] : a0;
+    const int end = model.subtree_end[J] < n ? model.joints[model.subtree_end[J]].idx_v : nv;
+    for (int k = 0; k < joint.nv; ++k) {
+      const int c = joint.idx_v + k;
+      const Motion<S> s = column(c);
+      const Motion<S> w = s.cross(vp);
+      const Motion<S> xi = s.cross(ap) - w.cross(vp);
+      const Motion<S> zeta = s.cross(vp + ov[J]);
+      for (int i = joint.idx_v; i < end; ++i) {
+        dtau_dq(i, c) = -pair(xi, P[i]) - pair(w, Qf[i]);
+        dtau_dv(i, c) = pair(s, Qf[i]) - pair(zeta, P[i]);
+        dtau_da(i, c) = pair(s, P[i]);
+      }
+      if (joint.parent < 0) continue;
+      const Force<S> G = s.cross(oF[J]) - oY[J] * xi - Force<S>::fromVector(oB[J] * w.toVector());
+      const Force<S> H = Force<S>::fromVector(oB[J] * s.toVector()) - oY[J] * zeta;
+      const Force<S> YS = oY[J] * s;
+      for (int r_joint = joint.parent; r_joint >= 0; r_joint = model.joints[r_joint].parent)
+        for (int kr = 0; kr < model.joints[r_joint].nv; ++kr) {
+          const int r = model.joints[r_joint].idx_v + kr;
+          const Motion<S> sr = column(r);
+          dtau_dq(r, c) = pair(sr, G);
+          dtau_dv(r, c) = pair(sr, H);
+          dtau_da(r, c) = pair(sr, YS);
+        }
+    }
+  }
+}
+
+}  // namespace robodiff
