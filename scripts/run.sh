@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job, from a fresh Debian 12 machine: install what is missing, build, and show
 # robodiff working. For now that is `robodiff compute` on the project's own robots (and
-# on the Panda arm when ../shared is present); later the service and a client.
+# on the Panda arm when ../shared is present), and the engine: a function generated,
+# compiled and cross-checked; later the service and a client.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,6 +25,13 @@ quad=examples/robots/quadruped.urdf
 echo
 echo "== a quadruped with a free-flyer base ($quad)"
 show compute --urdf "$quad" --floating-base --function com --random-state 2 --format table
+
+out=build/run-generated
+echo
+echo "== the engine: RNEA and its Jacobian d tau/d[q, v, a] generated as C, compiled, checked"
+show generate --urdf "$arm" --spec examples/specs/rnea_jacobian.json --out "$out"
+show check --urdf "$arm" --spec examples/specs/rnea_jacobian.json --samples 5
+show check --urdf "$quad" --floating-base --spec examples/specs/aba_jacobian.json --samples 3
 
 panda=../shared/robots/panda_arm_fixed_fingers.urdf
 if [ -f "$panda" ]; then

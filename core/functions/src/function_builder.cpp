@@ -136,6 +136,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   bool any_jacobian = false;
   for (const OutputSpec& o : spec.outputs) any_jacobian = any_jacobian || o.kind == OutputKind::Jacobian;
   const bool rnea_analytic = options.rnea_jacobian == RneaJacobianMethod::Analytic;
+  const bool aba_partials_analytic = options.aba_rnea_partials == RneaJacobianMethod::Analytic;
   // ABA's Jacobian from RNEA's partials at a = ddq.
   const bool aba_analytic =
       spec.function == ModelFunction::Aba && options.aba_jacobian == AbaJacobianMethod::Analytic && any_jacobian;
@@ -158,7 +159,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   };
   bool a_star_used = false;
   std::uint32_t a_star_first = 0;
-  if (aba_analytic && rnea_analytic) {
+  if (aba_analytic && aba_partials_analytic) {
     VecX<Sym> ddq(model.nv);
     for (int i = 0; i < model.nv; ++i) ddq[i] = Sym(g, trace->value[static_cast<std::size_t>(i)]);
     analyticPartials(ddq);
@@ -341,7 +342,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
 
   // In words, for descriptions and benchmarks.
   std::string method = std::string(info.name) + " traced";
-  const char* partials = rnea_analytic ? "analytic RNEA derivatives" : "differentiated RNEA";
+  const char* partials = aba_partials_analytic ? "analytic RNEA derivatives" : "differentiated RNEA";
   if (aba_analytic) method += std::string("; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq (") + partials + "), M^-1";
   else if (rnea_from_partials) method += "; Jacobian from analytic RNEA derivatives (Carpentier-Mansard)";
   else if (any_jacobian) method += "; Jacobian by symbolic differentiation";
