@@ -51,6 +51,19 @@ std::vector<std::string> outputNames(const FunctionSpec& spec) {
   return names;
 }
 
+// The n x n row-major blocks named by `wrt`, side by side: an n x (n |wrt|) row-major
+// Jacobian.
+std::vector<NodeId> sideBySide(const std::map<std::string, std::vector<NodeId>>& blocks,
+                               const std::vector<std::string>& wrt, int n) {
+  const std::size_t cols = static_cast<std::size_t>(n) * wrt.size();
+  std::vector<NodeId> out(static_cast<std::size_t>(n) * cols);
+  for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r)
+    for (std::size_t b = 0; b < wrt.size(); ++b)
+      for (std::size_t c = 0; c < static_cast<std::size_t>(n); ++c)
+        out[r * cols + b * n + c] = blocks.at(wrt[b])[r * n + c];
+  return out;
+}
+
 // The working trace: the model function on symbolic inputs, in a graph that may also
 // hold helper inputs (the tangent displacement dq, ABA's a*) that the assembled
 // function does not have.
@@ -203,13 +216,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
     } else if (o.kind == OutputKind::Jacobian) {
       if (aba_analytic) continue;
       if (rnea_from_partials) {  // the analytic partials, side by side in wrt order
-        const int n = model.nv, c_total = n * static_cast<int>(o.wrt.size());
-        trace_outputs[k].resize(static_cast<std::size_t>(n) * c_total);
-        for (int r = 0; r < n; ++r)
-          for (std::size_t b = 0; b < o.wrt.size(); ++b)
-            for (int c = 0; c < n; ++c)
-              trace_outputs[k][static_cast<std::size_t>(r) * c_total + b * n + c] =
-                  rnea_partials.at(o.wrt[b])[static_cast<std::size_t>(r) * n + c];
+        trace_outputs[k] = sideBySide(rnea_partials, o.wrt, model.nv);
         continue;
       }
       symbolic::Jacobian j = symbolic::jacobian(g, trace->value, wrtIndices(o.wrt), options.jacobian_mode);
@@ -260,14 +267,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
     }
     for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
       const OutputSpec& o = spec.outputs[k];
-      if (o.kind != OutputKind::Jacobian) continue;
-      const int c_total = n * static_cast<int>(o.wrt.size());
-      entries[k].resize(static_cast<std::size_t>(n) * c_total);
-      for (int r = 0; r < n; ++r)
-        for (std::size_t b = 0; b < o.wrt.size(); ++b)
-          for (int c = 0; c < n; ++c)
-            entries[k][static_cast<std::size_t>(r) * c_total + b * n + c] =
-                blocks.at(o.wrt[b])[static_cast<std::size_t>(r) * n + c];
+      if (o.kind == OutputKind::Jacobian) entries[k] = sideBySide(blocks, o.wrt, n);
     }
   }
   for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
