@@ -9,7 +9,9 @@
 #include "robodiff/dynamics/all.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 #include "support/golden.hpp"
+#include "support/json_matrix.hpp"
 #include "support/process.hpp"
+#include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff {
@@ -19,39 +21,10 @@ using testing::cliPath;
 using testing::matricesAgree;
 using testing::runCommand;
 using testing::shellQuote;
+using testing::TempDir;
+using testing::matrixOf;
 
 namespace fs = std::filesystem;
-
-class TempDir {
- public:
-  TempDir() : path_(fs::temp_directory_path() / ("robodiff-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  fs::path file(const std::string& name, const std::string& content) const {
-    fs::path p = path_ / name;
-    std::ofstream(p) << content;
-    return p;
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
-};
-
-Eigen::MatrixXd matrixOf(const nlohmann::json& j) {
-  if (!j.is_array() || j.empty()) return {};
-  if (!j[0].is_array()) {
-    Eigen::VectorXd v(j.size());
-    for (size_t i = 0; i < j.size(); ++i) v[i] = j[i].get<double>();
-    return v;
-  }
-  Eigen::MatrixXd m(j.size(), j[0].size());
-  for (size_t r = 0; r < j.size(); ++r)
-    for (size_t c = 0; c < j[r].size(); ++c) m(r, c) = j[r][c].get<double>();
-  return m;
-}
 
 // `robodiff compute --urdf URDF --state STATE ARGS`.
 std::string computeWith(const fs::path& urdf, const fs::path& state, const std::string& args) {

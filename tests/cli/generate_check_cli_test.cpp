@@ -11,6 +11,8 @@
 
 #include "support/golden.hpp"
 #include "support/process.hpp"
+#include "support/json_matrix.hpp"
+#include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff {
@@ -21,47 +23,10 @@ using testing::cliPath;
 using testing::matricesAgree;
 using testing::runCommand;
 using testing::shellQuote;
+using testing::TempDir;
+using testing::matrixOf;
 
 namespace fs = std::filesystem;
-
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() /
-              ("robodiff-gen-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  fs::path file(const std::string& name, const std::string& content) const {
-    fs::path p = path_ / name;
-    std::ofstream(p) << content;
-    return p;
-  }
-  // An executable shell script.
-  fs::path script(const std::string& name, const std::string& body) const {
-    fs::path p = file(name, "#!/bin/sh\n" + body);
-    ::chmod(p.c_str(), 0755);
-    return p;
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
-};
-
-Eigen::MatrixXd matrixOf(const json& j) {
-  if (!j.is_array() || j.empty()) return {};
-  if (!j[0].is_array()) {
-    Eigen::VectorXd v(j.size());
-    for (size_t i = 0; i < j.size(); ++i) v[i] = j[i].get<double>();
-    return v;
-  }
-  Eigen::MatrixXd m(j.size(), j[0].size());
-  for (size_t r = 0; r < j.size(); ++r)
-    for (size_t c = 0; c < j[r].size(); ++c) m(r, c) = j[r][c].get<double>();
-  return m;
-}
 
 std::string cli(const std::string& args) { return shellQuote(cliPath().string()) + " " + args; }
 

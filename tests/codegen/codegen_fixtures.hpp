@@ -10,25 +10,13 @@
 
 #include "robodiff/codegen/function_definition.hpp"
 #include "robodiff/symbolic/graph.hpp"
+#include "support/temp_dir.hpp"
 
 namespace robodiff::codegen::testing {
 
+using robodiff::testing::TempDir;
 using symbolic::Graph;
 using symbolic::Op;
-
-// A fresh directory under the system's temporary directory, removed on destruction.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
 
 // A random graph using every Op with arguments kept in safe ranges (inputs in [-1, 1]),
 // negations and constants sprinkled in, some sin/cos of one argument; a dense and a

@@ -43,6 +43,7 @@
 #include "robodiff/model/urdf_loader.hpp"
 #include "robodiff/symbolic/graph.hpp"
 #include "support/golden.hpp"
+#include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff {
@@ -51,26 +52,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::matricesAgree;
-
-// A fresh directory under the system's temporary directory, removed with everything in it.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "robodiff-function-library-test-XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed: " + pattern);
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using testing::TempDir;
 
 const Model& arm7() {
   static const Model m = loadUrdfFile((testing::sourceDir() / "examples/robots/arm7.urdf").string());
