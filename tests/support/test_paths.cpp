@@ -17,6 +17,7 @@ std::optional<std::filesystem::path> sharedDir() {
 
 std::filesystem::path sourceDir() { return ROBODIFF_SOURCE_DIR; }
 std::filesystem::path cliPath() { return ROBODIFF_CLI_PATH; }
+std::filesystem::path workerPath() { return ROBODIFF_WORKER_PATH; }
 
 std::string readFile(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

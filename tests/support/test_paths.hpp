@@ -14,7 +14,8 @@ namespace robodiff::testing {
 // The shared folder: $ROBODIFF_SHARED if set, else ../shared beside the source tree.
 std::optional<std::filesystem::path> sharedDir();
 std::filesystem::path sourceDir();
-std::filesystem::path cliPath();  // the built `robodiff` executable
+std::filesystem::path cliPath();     // the built `robodiff` executable
+std::filesystem::path workerPath();  // the built `robodiff-worker` executable
 
 std::string readFile(const std::filesystem::path& path);
 

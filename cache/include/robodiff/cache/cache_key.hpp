@@ -1,0 +1,36 @@
+// The cache key: the identity of a compiled function library, computed from its content.
+//
+// A key is the SHA-256 over everything that decides which bytes the build produces:
+// the robot (its canonical hash, so the same robot written differently gets the same
+// key and one changed mass a new one), the normalised function spec, the generator's
+// version and options, the compiler's identity and version, the flags, and the target
+// CPU (a -march=native library must never be served to another CPU).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace robodiff::cache {
+
+struct BuildIdentity {
+  std::string model_hash;         // canonicalHash(model)
+  std::string spec;               // normalizedSpecJson(spec)
+  std::string generator;          // codegen::kGeneratorVersion plus builder/codegen options
+  std::string compiler;           // the compiler's `--version` line
+  std::vector<std::string> flags; // exactly as passed to the compiler
+  std::string target_cpu;         // targetCpuIdentity(native)
+
+  // The text that is hashed: one "field=value" line per field, in a fixed order.
+  std::string canonicalText() const;
+  std::string key() const;  // lowercase hex SHA-256 of canonicalText()
+};
+
+// What the generated code may assume about the CPU. For a native build: the machine
+// architecture, the CPU vendor and model, and its instruction-set flags (from
+// /proc/cpuinfo). Otherwise: only the machine architecture.
+std::string targetCpuIdentity(bool native);
+
+// True when `text` looks like a key (64 lowercase hex digits); keys name directories.
+bool isCacheKey(const std::string& text);
+
+}  // namespace robodiff::cache

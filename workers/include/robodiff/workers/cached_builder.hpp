@@ -1,0 +1,78 @@
+// Builds (robot, spec) pairs through the cache and the worker pool, each key once
+// across every process sharing the cache:
+//   - ready in the cache: reported Cached at once (hash checked);
+//   - being built by another process: Waiting until it is ready (Cached), or until that
+//     process's claim lapses (then this process claims it);
+//   - otherwise claimed here, queued to a worker (Queued, Building), published by the
+//     worker (Done); a failed or crashed job drops the claim and leaves nothing behind.
+// Claims in flight are renewed by a thread of their own while workers build.
+// Used by `robodiff warmup` now and the server later.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "robodiff/cache/cache.hpp"
+#include "robodiff/workers/worker_pool.hpp"
+
+namespace robodiff::workers {
+
+struct BuildTarget {
+  std::string urdf_path;
+  bool floating_base = false;
+  std::string spec_path;
+  std::string function_name;  // C name; empty: the spec's function
+};
+
+enum class BuildState : std::uint8_t {
+  Pending,   // not looked at yet
+  Cached,    // was in the cache (or another process built it while we waited)
+  Waiting,   // another process is building it
+  Queued,    // claimed here, waiting for a worker
+  Building,  // a worker builds it (`stage` says where it is)
+  Done,      // built here and published
+  Failed,    // `message` says why; nothing was published
+};
+const char* toString(BuildState state);
+inline bool isFinal(BuildState s) { return s == BuildState::Cached || s == BuildState::Done || s == BuildState::Failed; }
+
+struct BuildStatus {
+  BuildState state = BuildState::Pending;
+  std::string robot;     // the model's name, or the URDF path before it is loaded
+  std::string function;  // the function's C name, or the spec path before it is read
+  std::string key;
+  std::string stage;     // Building: "model", "trace", "compile", "publish"
+  std::string message;   // Failed: the reason (the compiler's first lines included); Waiting: who builds it
+  double seconds = 0;    // since this target was started (final: how long it took)
+  std::uint64_t library_bytes = 0;
+};
+
+struct CachedBuilderOptions {
+  std::string compiler;  // empty: $CC or cc
+  std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
+  std::chrono::milliseconds job_timeout = std::chrono::minutes(15);
+  std::chrono::milliseconds poll_interval = std::chrono::milliseconds(100);  // while Waiting
+};
+
+class CachedBuilder {
+ public:
+  CachedBuilder(cache::Cache& cache, WorkerPool& pool, CachedBuilderOptions options = {});
+
+  // Called on every change of a target's status (index into the targets), from the
+  // calling thread or the pool's thread; never concurrently.
+  using Listener = std::function<void(std::size_t index, const BuildStatus& status)>;
+
+  // Builds every target and returns their final statuses (same order). Returns when all
+  // are final.
+  std::vector<BuildStatus> buildAll(const std::vector<BuildTarget>& targets, const Listener& listener = {});
+
+ private:
+  cache::Cache& cache_;
+  WorkerPool& pool_;
+  CachedBuilderOptions options_;
+};
+
+}  // namespace robodiff::workers
