@@ -12,5 +12,7 @@ void addMakeRobotCommand(CLI::App& app);
 void addGenerateCommand(CLI::App& app);  // generate_command.cpp
 void addCheckCommand(CLI::App& app);     // check_command.cpp
 void addBenchCommand(CLI::App& app);     // bench_command.cpp
+void addWarmupCommand(CLI::App& app);    // warmup_command.cpp
+void addCacheCommand(CLI::App& app);     // cache_command.cpp
 
 }  // namespace robodiff::cli

@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   robodiff::cli::addGenerateCommand(app);
   robodiff::cli::addCheckCommand(app);
   robodiff::cli::addBenchCommand(app);
+  robodiff::cli::addWarmupCommand(app);
+  robodiff::cli::addCacheCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
