@@ -39,6 +39,7 @@ class CacheError : public std::runtime_error {
     Database,     // SQLite failed (the message has its error)
     Budget,       // the size budget cannot make room (everything left is in use)
     ClaimLost,    // another process took over this claim (its lease had run out)
+    InUse,        // the entry is loaded by a process (pinned) and cannot be removed
   };
   CacheError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const { return kind_; }
@@ -145,6 +146,7 @@ struct GcReport {
   std::uint64_t freed_bytes = 0, bytes_after = 0;
   std::uint64_t kept_in_use = 0;     // entries over budget left because in use
   std::uint64_t stale_claims = 0, stale_staging = 0;  // left by dead processes, removed
+  std::uint64_t quarantine_removed = 0;              // corrupt artifacts kept for inspection, removed
 };
 
 class Cache {
@@ -190,12 +192,13 @@ class Cache {
   // Evicts least-recently-used unpinned entries until the total fits `budget_bytes`
   // (the configured budget when unset); removes claims and staging left by dead processes.
   GcReport gc(std::optional<std::uint64_t> budget_bytes = std::nullopt);
-  // Removes one entry. False when there is none; throws CacheError(Budget) naming it
+  // Removes one entry. False when there is none; throws CacheError(InUse) naming it
   // when it is in use.
   bool remove(const std::string& key);
 
+  struct State;  // opaque: defined in cache.cpp
+
  private:
-  struct State;
   explicit Cache(std::unique_ptr<State> state);
   std::unique_ptr<State> state_;
 };
