@@ -139,10 +139,25 @@ std::string artifactProblem(const Entry& e, const fs::path& dir) {
 
 }  // namespace
 
-std::optional<Artifact> Cache::find(const std::string& key) {
-  requireKey(key);
-  std::lock_guard lock(state_->mutex);
-  State& s = *state_;
+namespace {
+
+}  // namespace
+
+struct detail::ArtifactAccess {
+  static Artifact make(Entry entry, fs::path dir, std::shared_ptr<int> pin) {
+    Artifact a;
+    a.entry_ = std::move(entry);
+    a.dir_ = std::move(dir);
+    a.pin_ = std::move(pin);
+    return a;
+  }
+};
+
+namespace {
+
+// The verified, pinned artifact of a ready key (a hit counted when asked); nullopt when
+// absent, being built, or corrupt (then quarantined). Caller holds the mutex.
+std::optional<Artifact> loadArtifact(Cache::State& s, const std::string& key, bool count_hit) {
   std::optional<Entry> row = s.db->entry(key);
   if (!row || row->state != "ready") return std::nullopt;
   const fs::path dir = s.objectDir(key);
@@ -151,26 +166,33 @@ std::optional<Artifact> Cache::find(const std::string& key) {
     quarantineEntry(s, key, "its pin file is missing");
     return std::nullopt;
   }
-  Artifact a;
-  a.pin_ = holdPin(fd);
+  std::shared_ptr<int> pin = holdPin(fd);
   row = s.db->entry(key);  // eviction may have removed it before the lock was ours
   if (!row || row->state != "ready") return std::nullopt;
   checkNotWritableByOthers(dir);
   checkNotWritableByOthers(dir / "library.so");
   if (const std::string problem = artifactProblem(*row, dir); !problem.empty()) {
-    a.pin_.reset();
+    pin.reset();
     quarantineEntry(s, key, problem);
     return std::nullopt;
   }
-  const std::int64_t now = unixSeconds();
-  s.db->immediate([&] {
-    Statement(s.db->handle(), "UPDATE entries SET hits = hits + 1, last_used = ? WHERE key = ?").bind(1, now).bind(2, key).run();
-  });
-  row->hits += 1;
-  row->last_used = now;
-  a.entry_ = std::move(*row);
-  a.dir_ = dir;
-  return a;
+  if (count_hit) {
+    const std::int64_t now = unixSeconds();
+    s.db->immediate([&] {
+      Statement(s.db->handle(), "UPDATE entries SET hits = hits + 1, last_used = ? WHERE key = ?").bind(1, now).bind(2, key).run();
+    });
+    row->hits += 1;
+    row->last_used = now;
+  }
+  return detail::ArtifactAccess::make(std::move(*row), dir, std::move(pin));
+}
+
+}  // namespace
+
+std::optional<Artifact> Cache::find(const std::string& key) {
+  requireKey(key);
+  std::lock_guard lock(state_->mutex);
+  return loadArtifact(*state_, key, true);
 }
 
 ClaimResult Cache::claim(const std::string& key, const EntryInfo& info) {
@@ -397,7 +419,11 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
     abandon(claim);
     throw;
   }
-  std::optional<Artifact> published = find(claim.key);
+  std::optional<Artifact> published;
+  {
+    std::lock_guard lock(s.mutex);
+    published = loadArtifact(s, claim.key, false);
+  }
   if (!published)
     throw CacheError(CacheError::Kind::Io, "cache entry " + claim.key + " was published but cannot be loaded back");
   return *published;

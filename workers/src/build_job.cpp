@@ -1,1 +1,390 @@
-// placeholder
+#include "robodiff/workers/build_job.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <new>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "robodiff/codegen/compiler.hpp"
+#include "robodiff/model/canonical.hpp"
+#include "robodiff/model/urdf_loader.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::workers {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+// Compiler output kept in an outcome: enough for the first errors, not a megabyte of them.
+constexpr std::size_t kOutputKeep = 8 * 1024;
+
+std::string trimmed(const std::string& text) {
+  if (text.size() <= kOutputKeep) return text;
+  return text.substr(0, kOutputKeep) + "\n... (" + std::to_string(text.size() - kOutputKeep) + " more bytes)";
+}
+
+// --- JSON fields, checked: a missing or mistyped one is named ---
+
+class Fields {
+ public:
+  Fields(const json& object, std::string where) : object_(object), where_(std::move(where)) {
+    if (!object_.is_object()) throw std::invalid_argument(where_ + ": expected a JSON object");
+  }
+
+  template <typename T>
+  T required(const char* name) const {
+    const auto it = object_.find(name);
+    if (it == object_.end()) throw std::invalid_argument(where_ + ": missing field \"" + name + "\"");
+    return convert<T>(*it, name);
+  }
+  template <typename T>
+  void optional(const char* name, T& out) const {
+    const auto it = object_.find(name);
+    if (it != object_.end()) out = convert<T>(*it, name);
+  }
+  const json& object(const char* name) const {
+    const auto it = object_.find(name);
+    if (it == object_.end()) throw std::invalid_argument(where_ + ": missing field \"" + name + "\"");
+    return *it;
+  }
+  bool has(const char* name) const { return object_.contains(name); }
+  std::string path(const char* name) const { return where_ + "." + name; }
+
+ private:
+  template <typename T>
+  T convert(const json& value, const char* name) const {
+    bool fits;
+    if constexpr (std::is_same_v<T, std::string>) fits = value.is_string();
+    else if constexpr (std::is_same_v<T, bool>) fits = value.is_boolean();
+    else if constexpr (std::is_same_v<T, double>) fits = value.is_number();
+    else if constexpr (std::is_unsigned_v<T>) fits = value.is_number_unsigned();
+    else fits = value.is_number_integer();
+    if (!fits) {
+      const char* expected = std::is_same_v<T, std::string> ? "a string"
+                             : std::is_same_v<T, bool>      ? "true or false"
+                             : std::is_same_v<T, double>    ? "a number"
+                             : std::is_unsigned_v<T>        ? "a non-negative integer"
+                                                            : "an integer";
+      throw std::invalid_argument(where_ + ": field \"" + name + "\" must be " + expected + ", not " +
+                                  value.dump().substr(0, 80));
+    }
+    return value.get<T>();
+  }
+
+  const json& object_;
+  std::string where_;
+};
+
+json parseObject(const std::string& text, const std::string& what) {
+  json j = json::parse(text, nullptr, false);
+  if (j.is_discarded()) throw std::invalid_argument(what + ": not valid JSON");
+  if (!j.is_object()) throw std::invalid_argument(what + ": expected a JSON object");
+  return j;
+}
+
+json toJson(const cache::EntryInfo& info) {
+  return {{"model_hash", info.model_hash}, {"robot", info.robot},       {"function", info.function},
+          {"spec", info.spec},             {"sizes", info.sizes},       {"compiler", info.compiler},
+          {"build_seconds", info.build_seconds}};
+}
+
+cache::EntryInfo entryInfoFromJson(const json& j, const std::string& where) {
+  const Fields f(j, where);
+  cache::EntryInfo info;
+  f.optional("model_hash", info.model_hash);
+  f.optional("robot", info.robot);
+  f.optional("function", info.function);
+  f.optional("spec", info.spec);
+  f.optional("sizes", info.sizes);
+  f.optional("compiler", info.compiler);
+  f.optional("build_seconds", info.build_seconds);
+  return info;
+}
+
+// --- the build identity ---
+
+const char* methodName(AbaJacobianMethod m) { return m == AbaJacobianMethod::Analytic ? "analytic" : "differentiate"; }
+const char* methodName(RneaJacobianMethod m) {
+  return m == RneaJacobianMethod::Analytic ? "analytic" : "differentiate";
+}
+
+// The generator's version and every builder and codegen option that changes the code
+// generated for the same model and spec (the C name included: it is in the library).
+std::string generatorIdentity(const LibraryOptions& options, const std::string& c_name) {
+  const FunctionBuilderOptions& b = options.builder;
+  const codegen::CodegenOptions& c = options.codegen;
+  return std::string(codegen::kGeneratorVersion) + "; name=" + c_name + "; aba_jacobian=" +
+         methodName(b.aba_jacobian) + "; rnea_jacobian=" + methodName(b.rnea_jacobian) +
+         "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) +
+         "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
+         "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
+}
+
+// The compiler's identity, asked once per compiler program in this process.
+std::string cachedCompilerIdentity(const codegen::CompilerOptions& options) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> known;
+  const std::string program = codegen::compilerProgram(options);
+  {
+    std::lock_guard lock(mutex);
+    if (const auto it = known.find(program); it != known.end()) return it->second;
+  }
+  std::string identity = codegen::compilerIdentity(options);  // slow: outside the lock
+  std::lock_guard lock(mutex);
+  return known.emplace(program, std::move(identity)).first->second;
+}
+
+std::string joined(const std::vector<std::string>& words) {
+  std::string text;
+  for (const auto& w : words) text += (text.empty() ? "" : " ") + w;
+  return text;
+}
+
+// {"inputs": [doubles per block], "outputs": [doubles written per block]}
+std::string blockSizes(const codegen::FunctionDefinition& definition) {
+  json inputs = json::array(), outputs = json::array();
+  for (const auto& block : definition.inputs) inputs.push_back(block.size);
+  for (const auto& block : definition.outputs) outputs.push_back(block.size());
+  return json{{"inputs", inputs}, {"outputs", outputs}}.dump();
+}
+
+// The sources as compiled (.c and .h under the build's src/), not the objects.
+std::vector<fs::path> sourceFiles(const fs::path& src_dir) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::recursive_directory_iterator(src_dir)) {
+    const auto ext = entry.path().extension();
+    if (entry.is_regular_file() && (ext == ".c" || ext == ".h")) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void fail(BuildOutcome& outcome, const char* kind, const std::string& message, const std::string& output = {}) {
+  outcome.ok = false;
+  outcome.error_kind = kind;
+  outcome.message = trimmed(message);
+  outcome.compiler_output = trimmed(output);
+}
+
+const char* compileErrorKind(codegen::CompileError::Kind kind) {
+  using Kind = codegen::CompileError::Kind;
+  switch (kind) {
+    case Kind::CompilerFailed: return "compile_failed";
+    case Kind::Timeout: return "compile_timeout";
+    case Kind::MemoryLimit: return "compile_memory";
+    case Kind::CannotRun: return "compiler_missing";
+    case Kind::Io: return "internal";
+  }
+  return "internal";
+}
+
+}  // namespace
+
+// --- codecs ---
+
+std::string toJson(const BuildRequest& r) {
+  json j = {{"urdf", r.urdf},
+            {"urdf_source", r.urdf_source},
+            {"floating_base", r.floating_base},
+            {"spec", r.spec},
+            {"spec_source", r.spec_source},
+            {"function_name", r.function_name},
+            {"compiler", r.compiler},
+            {"compiler_memory_limit_bytes", r.compiler_memory_limit_bytes},
+            {"compiler_timeout_ms", static_cast<std::uint64_t>(std::max<std::int64_t>(r.compiler_timeout.count(), 0))},
+            {"compiler_jobs", r.compiler_jobs},
+            {"cache_dir", r.cache_dir},
+            {"cache_budget_bytes", r.cache_budget_bytes},
+            {"claim", {{"key", r.claim.key}, {"owner", r.claim.owner}}},
+            {"info", toJson(r.info)}};
+  return j.dump();
+}
+
+BuildRequest buildRequestFromJson(const std::string& json_text) {
+  const json j = parseObject(json_text, "build request");
+  const Fields f(j, "build request");
+  BuildRequest r;
+  r.urdf = f.required<std::string>("urdf");
+  r.spec = f.required<std::string>("spec");
+  r.cache_dir = f.required<std::string>("cache_dir");
+  f.optional("urdf_source", r.urdf_source);
+  f.optional("floating_base", r.floating_base);
+  f.optional("spec_source", r.spec_source);
+  f.optional("function_name", r.function_name);
+  f.optional("compiler", r.compiler);
+  f.optional("compiler_memory_limit_bytes", r.compiler_memory_limit_bytes);
+  std::uint64_t timeout_ms = static_cast<std::uint64_t>(r.compiler_timeout.count());
+  f.optional("compiler_timeout_ms", timeout_ms);
+  r.compiler_timeout = std::chrono::milliseconds(timeout_ms);
+  f.optional("compiler_jobs", r.compiler_jobs);
+  f.optional("cache_budget_bytes", r.cache_budget_bytes);
+  const Fields claim(f.object("claim"), f.path("claim"));
+  r.claim.key = claim.required<std::string>("key");
+  r.claim.owner = claim.required<std::string>("owner");
+  if (f.has("info")) r.info = entryInfoFromJson(f.object("info"), f.path("info"));
+  return r;
+}
+
+std::string toJson(const BuildOutcome& o) {
+  json j = {{"ok", o.ok},       {"error_kind", o.error_kind}, {"message", o.message},
+            {"key", o.key},     {"seconds", o.seconds},       {"operations", o.operations},
+            {"library_bytes", o.library_bytes}};
+  if (!o.compiler_output.empty()) j["compiler_output"] = o.compiler_output;
+  return j.dump();
+}
+
+BuildOutcome buildOutcomeFromJson(const std::string& json_text) {
+  const json j = parseObject(json_text, "build outcome");
+  const Fields f(j, "build outcome");
+  BuildOutcome o;
+  o.ok = f.required<bool>("ok");
+  f.optional("error_kind", o.error_kind);
+  f.optional("message", o.message);
+  f.optional("compiler_output", o.compiler_output);
+  f.optional("key", o.key);
+  f.optional("seconds", o.seconds);
+  f.optional("operations", o.operations);
+  f.optional("library_bytes", o.library_bytes);
+  return o;
+}
+
+// --- preparing and running a build ---
+
+PreparedBuild prepareBuild(const Model& model, const FunctionSpec& spec, const std::string& function_name,
+                           const std::string& compiler) {
+  PreparedBuild p;
+  if (!function_name.empty()) p.options.builder.name = function_name;
+  p.options.compiler.compiler = compiler;
+  // The C name buildFunction gives the function.
+  const std::string c_name = function_name.empty() ? std::string(functionInfo(spec.function).name) : function_name;
+  const codegen::CompilerOptions effective = compilerOptionsFor(spec.build, p.options.compiler);
+
+  p.identity.model_hash = canonicalHash(model);
+  p.identity.spec = normalizedSpecJson(spec);
+  p.identity.generator = generatorIdentity(p.options, c_name);
+  p.identity.compiler = cachedCompilerIdentity(effective);
+  p.identity.flags = codegen::compilerFlags(effective);
+  p.identity.target_cpu = cache::targetCpuIdentity(spec.build.march_native);
+  p.key = p.identity.key();
+
+  p.info.model_hash = p.identity.model_hash;
+  p.info.robot = model.name;
+  p.info.function = c_name;
+  p.info.spec = p.identity.spec;
+  p.info.compiler = p.identity.compiler + " " + joined(p.identity.flags);
+  return p;  // info.sizes: known once built (executeBuild fills it)
+}
+
+BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(const std::string& stage)>& progress) {
+  const auto started = Clock::now();
+  auto stage = [&](const char* name) {
+    if (progress) progress(name);
+  };
+  BuildOutcome outcome;
+  outcome.key = request.claim.key;
+  fs::path staging;  // this build's directory, removed when the build fails
+  try {
+    stage("model");
+    const Model model = loadUrdfString(request.urdf, request.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed,
+                                       request.urdf_source.empty() ? "<string>" : request.urdf_source);
+    const FunctionSpec spec = parseFunctionSpec(request.spec, request.spec_source.empty() ? "<spec>" : request.spec_source);
+    PreparedBuild prepared = prepareBuild(model, spec, request.function_name, request.compiler);
+    if (prepared.key != request.claim.key) {
+      fail(outcome, "internal",
+           "the worker computed the key " + prepared.key + " for this build but the claim is for " +
+               request.claim.key + ": the requester and the worker disagree on the build's identity (" +
+               "different robodiff versions, or a different compiler or $CC?)");
+      return outcome;
+    }
+    LibraryOptions options = prepared.options;
+    options.compiler.memory_limit_bytes = request.compiler_memory_limit_bytes;
+    options.compiler.timeout = request.compiler_timeout;
+    options.compiler.jobs = request.compiler_jobs;
+
+    cache::CacheOptions cache_options;
+    cache_options.budget_bytes = request.cache_budget_bytes;
+    cache_options.create = false;  // the requester made it; a missing one is an error
+    cache::Cache cache = cache::Cache::open(request.cache_dir, cache_options);
+    staging = cache.stagingDir(request.claim);
+    const fs::path out_dir = staging / "build";
+
+    // generateFunctionLibrary's steps one by one, so that each stage is reported.
+    stage("trace");
+    BuiltFunction built = buildFunction(model, spec, options.builder);
+    GeneratedFunctionLibrary generated;
+    const auto emit_started = Clock::now();
+    const codegen::GeneratedLibrary sources = codegen::generateLibrary(*built.graph, {built.definition}, options.codegen);
+    generated.emit_seconds = std::chrono::duration<double>(Clock::now() - emit_started).count();
+    generated.info = sources.functions.at(0);
+    for (const codegen::SourceFile& s : sources.sources) generated.source_bytes += s.text.size();
+
+    stage("compile");
+    fs::create_directories(out_dir);
+    codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
+    if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());
+    compiler.build_dir = out_dir / "src";
+    compiler.keep_build_dir = true;
+    const std::string& name = built.definition.name;
+    generated.library = out_dir / (name + ".so");
+    generated.compile = codegen::compileLibrary(sources, generated.library, compiler);
+    generated.library_bytes = fs::file_size(generated.library);
+    generated.description = out_dir / (name + ".json");
+    {
+      std::ofstream description(generated.description, std::ios::binary);
+      description << describeFunction(model, spec, built, &generated) << "\n";
+      if (!description.flush()) throw std::runtime_error("cannot write " + generated.description.string());
+    }
+
+    stage("publish");
+    cache::EntryInfo info = request.info;
+    const cache::EntryInfo& known = prepared.info;
+    if (info.model_hash.empty()) info.model_hash = known.model_hash;
+    if (info.robot.empty()) info.robot = known.robot;
+    if (info.function.empty()) info.function = known.function;
+    if (info.spec.empty()) info.spec = known.spec;
+    if (info.compiler.empty()) info.compiler = known.compiler;
+    info.sizes = blockSizes(built.definition);
+    info.build_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    cache::ArtifactFiles files;
+    files.library = generated.library;
+    files.description = generated.description;
+    files.sources = sourceFiles(compiler.build_dir);
+    cache.publish(request.claim, info, files);
+
+    outcome.ok = true;
+    outcome.operations = generated.info.operations;
+    outcome.library_bytes = generated.library_bytes;
+  } catch (const ModelError& e) {
+    fail(outcome, "invalid_urdf", e.what());
+  } catch (const SpecError& e) {
+    fail(outcome, "invalid_spec", e.what());
+  } catch (const symbolic::GraphTooLarge& e) {
+    fail(outcome, "graph_too_large", e.what());
+  } catch (const codegen::CompileError& e) {
+    fail(outcome, compileErrorKind(e.kind()), e.what(), e.compilerOutput());
+  } catch (const cache::CacheError& e) {
+    fail(outcome, "cache", e.what());
+  } catch (const std::bad_alloc&) {
+    fail(outcome, "internal",
+         "out of memory while building (std::bad_alloc): the worker's address-space limit is too low for this "
+         "function, or the machine is out of memory");
+  } catch (const std::exception& e) {
+    fail(outcome, "internal", e.what());
+  } catch (...) {
+    fail(outcome, "internal", "unknown exception");
+  }
+  if (!outcome.ok && !staging.empty()) {
+    std::error_code ec;  // the claim is the requester's to abandon; the files are ours
+    fs::remove_all(staging, ec);
+  }
+  outcome.seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  return outcome;
+}
+
+}  // namespace robodiff::workers

@@ -59,10 +59,12 @@ pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, i
   const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
   struct rlimit as_limit;
   as_limit.rlim_cur = as_limit.rlim_max = static_cast<rlim_t>(limits.address_space_bytes);
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid == 0) {
     setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
     prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
+    if (getppid() != parent) _exit(127);  // (a worker killed before prctl took effect)
     if (limits.address_space_bytes > 0) setrlimit(RLIMIT_AS, &as_limit);
     if (devnull >= 0) dup2(devnull, 0);
     dup2(out[1], 1);

@@ -82,6 +82,10 @@ struct Entry {
   std::int64_t lease_expires_ms = 0;  // building: unix milliseconds
 };
 
+namespace detail {
+struct ArtifactAccess;  // cache.cpp: the only maker of Artifacts
+}
+
 // A verified artifact, pinned (never evicted) while this object or a copy lives.
 class Artifact {
  public:
@@ -92,7 +96,7 @@ class Artifact {
   std::filesystem::path description() const { return dir_ / "description.json"; }
 
  private:
-  friend class Cache;
+  friend struct detail::ArtifactAccess;
   Entry entry_;
   std::filesystem::path dir_;
   std::shared_ptr<int> pin_;  // the shared flock on dir/pin, released with the last copy

@@ -32,6 +32,8 @@ struct BuildRequest {
   std::chrono::milliseconds compiler_timeout = std::chrono::minutes(10);
   unsigned compiler_jobs = 1;   // translation units compiled at once inside this build
   std::string cache_dir;
+  // The budget the requester opened the cache with: publish() trims the cache to it.
+  std::uint64_t cache_budget_bytes = cache::CacheOptions{}.budget_bytes;
   cache::Claim claim;
   cache::EntryInfo info;
 };

@@ -5,12 +5,18 @@
 // 4-byte little-endian length, then JSON; see worker_protocol.hpp). A worker may send
 // progress messages before its one result.
 //
-// Isolation: each worker is its own process group, runs a job under the job's
+// Isolation: each worker leads its own session and process group (so that everything it
+// starts can be found and killed, orphans included), runs a job under the job's
 // address-space limit (setrlimit, set by the worker itself), and dies with the pool
-// (PR_SET_PDEATHSIG). A job past its timeout, or cancelled while running, gets its
-// worker and everything the worker started killed. A worker that dies during a job
-// fails only that job (JobState::Crashed, with the signal or exit status), and the pool
-// starts a new worker in its place.
+// (PR_SET_PDEATHSIG: workers are started by the pool's own thread, which lives as long
+// as the pool). A job past its timeout, or cancelled while running, gets its worker and
+// everything the worker started killed. A worker that dies during a job fails only that
+// job (JobState::Crashed, with the signal or exit status), and the pool starts a new
+// worker in its place (a second later when the last one exited by itself right after
+// it started: a broken install is not restarted in a tight loop).
+//
+// SIGPIPE: the pool's thread blocks it for itself (a write to a dead worker fails with
+// EPIPE instead); the process's own SIGPIPE disposition is left alone.
 #pragma once
 
 #include <chrono>
@@ -62,7 +68,7 @@ struct JobCallbacks {
   std::function<void(const std::string& message)> on_progress;  // a progress message (JSON)
 };
 // Callbacks run on the pool's supervisor thread: keep them short, never call back into
-// the pool from them.
+// the pool from them. A job's result is set after every callback of that job returned.
 
 using JobId = std::uint64_t;
 
@@ -98,10 +104,16 @@ class WorkerPool {
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
-  // Queues a job. Throws QueueFull when queue_capacity jobs already wait.
+  // Queues a job. `request_json`: a JSON object with a "type" (worker_protocol.hpp:
+  // buildRequestMessage, pingRequest); the pool adds "id", and "limits" from the options
+  // unless the request has its own. Throws std::invalid_argument when it is not such an
+  // object, ProtocolError when it is larger than a frame may be, QueueFull when
+  // queue_capacity jobs already wait (jobs about to go to an idle worker do not count).
   JobHandle submit(std::string request_json, JobCallbacks callbacks = {},
                    std::optional<std::chrono::milliseconds> timeout = std::nullopt);
   // Cancels a queued or running job; false when it has already finished or is unknown.
+  // When true, the job's result is Cancelled: at once for a queued job, once its worker
+  // is killed for a running one.
   bool cancel(JobId id);
 
   std::vector<WorkerInfo> workers() const;

@@ -1,0 +1,187 @@
+// The builder over a real cache directory, a real SQLite index and real robodiff-worker
+// processes: a build is published once and found after; a worker killed with SIGKILL
+// in the middle of a compile fails only its job, leaves no index row, no file under
+// its key and no compiler behind, and the pool builds the next job on a new worker; a
+// compiler error reaches the caller with the compiler's message.
+#include <signal.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "robodiff/cache/cache.hpp"
+#include "robodiff/codegen/loaded_library.hpp"
+#include "robodiff/workers/cached_builder.hpp"
+#include "robodiff/workers/worker_pool.hpp"
+#include "support/temp_dir.hpp"
+#include "support/test_paths.hpp"
+
+namespace robodiff::workers {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+using Clock = std::chrono::steady_clock;
+
+// The example spec `name`, built at -O0 for a generic target to keep compiles short.
+std::string fastSpec(const TempDir& tmp, const std::string& name) {
+  nlohmann::json spec = nlohmann::json::parse(testing::readFile(testing::sourceDir() / "examples/specs" / (name + ".json")));
+  spec["build"] = {{"optimization", "O0"}, {"march_native", false}};
+  return tmp.file(name + ".json", spec.dump()).string();
+}
+
+std::string arm7() { return (testing::sourceDir() / "examples/robots/arm7.urdf").string(); }
+
+// A compiler that answers --version like cc (so keys match cc's) and otherwise runs `body`.
+std::string compilerScript(const TempDir& tmp, const std::string& name, const std::string& body) {
+  return tmp
+      .script(name, "if [ \"$1\" = \"--version\" ] || [ \"$1\" = \"-v\" ]; then exec cc \"$@\"; fi\n" + body)
+      .string();
+}
+
+WorkerPoolOptions poolOptions(unsigned workers = 1) {
+  WorkerPoolOptions o;
+  o.worker_executable = testing::workerPath();
+  o.workers = workers;
+  return o;
+}
+
+bool waitFor(const std::function<bool()>& condition, std::chrono::seconds limit) {
+  const auto deadline = Clock::now() + limit;
+  while (Clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return condition();
+}
+
+bool processExists(pid_t pid) {
+  if (::kill(pid, 0) != 0) return false;
+  // A zombie (killed, not yet reaped by its new parent) is gone for our purposes.
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  std::getline(stat, text);
+  const auto close = text.rfind(')');
+  return close == std::string::npos || text.substr(close + 2, 1) != "Z";
+}
+
+std::size_t filesUnder(const fs::path& dir) {
+  std::size_t n = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file()) ++n;
+  return n;
+}
+
+TEST(CachedBuilder, BuildsOncePublishesAndThenFindsInTheCache) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  CachedBuilder builder(cache, pool);
+  const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""},
+                                            {arm7(), false, fastSpec(tmp, "crba"), ""}};
+  std::vector<BuildState> seen;
+  const std::vector<BuildStatus> first = builder.buildAll(targets, [&](std::size_t i, const BuildStatus& s) {
+    if (i == 0) seen.push_back(s.state);
+  });
+  ASSERT_EQ(first.size(), 2u);
+  for (const BuildStatus& s : first) ASSERT_EQ(s.state, BuildState::Done) << s.function << ": " << s.message;
+  EXPECT_EQ(first[0].robot, "arm7");
+  EXPECT_EQ(seen.back(), BuildState::Done);
+  EXPECT_NE(std::find(seen.begin(), seen.end(), BuildState::Building), seen.end());
+
+  const std::optional<cache::Artifact> a = cache.find(first[0].key);
+  ASSERT_TRUE(a);
+  const codegen::LoadedLibrary lib = codegen::LoadedLibrary::open(a->library());
+  EXPECT_NO_THROW(lib.function(first[0].function));
+
+  const std::vector<BuildStatus> second = builder.buildAll(targets);
+  for (const BuildStatus& s : second) EXPECT_EQ(s.state, BuildState::Cached) << s.function;
+  EXPECT_EQ(second[0].key, first[0].key);
+  EXPECT_EQ(pool.stats().succeeded, 2u);  // no job for the cached ones
+}
+
+TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  const fs::path pid_file = tmp / "compiler.pid";
+  CachedBuilderOptions options;
+  options.compiler = compilerScript(tmp, "slow-cc", "echo $$ > " + pid_file.string() + "\nexec sleep 60\n");
+  CachedBuilder builder(cache, pool, options);
+  const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""}};
+
+  auto running = std::async(std::launch::async, [&] { return builder.buildAll(targets); });
+  ASSERT_TRUE(waitFor([&] { return fs::exists(pid_file) && fs::file_size(pid_file) > 0; }, std::chrono::seconds(60)))
+      << "the compiler never started";
+  const pid_t compiler = std::stoi(testing::readFile(pid_file));
+  const pid_t worker = pool.workers().at(0).pid;
+  ASSERT_GT(worker, 0);
+  ASSERT_EQ(::kill(worker, SIGKILL), 0);
+  ASSERT_EQ(running.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  const std::vector<BuildStatus> result = running.get();
+
+  ASSERT_EQ(result[0].state, BuildState::Failed);
+  EXPECT_NE(result[0].message.find("SIGKILL"), std::string::npos) << result[0].message;
+  // No row, no artifact, no staging, no compiler left running.
+  EXPECT_FALSE(cache.entry(result[0].key));
+  EXPECT_FALSE(fs::exists(tmp / "cache" / "objects" / result[0].key.substr(0, 2) / result[0].key));
+  EXPECT_EQ(filesUnder(tmp / "cache" / "objects"), 0u);
+  EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
+  EXPECT_TRUE(waitFor([&] { return !processExists(compiler); }, std::chrono::seconds(10)))
+      << "compiler " << compiler << " outlived its worker";
+
+  // The pool replaced the worker; the same key builds with a working compiler.
+  EXPECT_TRUE(waitFor([&] { return pool.workers().at(0).pid != worker && pool.workers().at(0).pid > 0; },
+                      std::chrono::seconds(10)));
+  CachedBuilder working(cache, pool);
+  const std::vector<BuildStatus> again = working.buildAll(targets);
+  ASSERT_EQ(again[0].state, BuildState::Done) << again[0].message;
+  EXPECT_EQ(again[0].key, result[0].key);
+  EXPECT_TRUE(cache.find(again[0].key));
+}
+
+TEST(CachedBuilder, ACompilerErrorReachesTheCallerAndNothingIsPublished) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  CachedBuilderOptions options;
+  options.compiler =
+      compilerScript(tmp, "broken-cc", "echo 'part0.c:1:1: error: simulated failure for the test' >&2\nexit 1\n");
+  CachedBuilder builder(cache, pool, options);
+  const std::vector<BuildStatus> result = builder.buildAll({{arm7(), false, fastSpec(tmp, "gravity_jacobian"), ""}});
+  ASSERT_EQ(result[0].state, BuildState::Failed);
+  EXPECT_NE(result[0].message.find("simulated failure for the test"), std::string::npos) << result[0].message;
+  EXPECT_TRUE(cache.list().empty());
+  EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
+}
+
+TEST(CachedBuilder, BadRobotsAndSpecsFailWithTheirReasonWithoutAWorker) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  CachedBuilder builder(cache, pool);
+  const std::string bad_urdf = tmp.file("bad.urdf", "<robot name=\"x\"><link name=\"a\"/><joint name=\"j\" type=\"revolute\">"
+                                                    "<parent link=\"a\"/><child link=\"missing\"/></joint></robot>")
+                                   .string();
+  const std::string bad_spec = tmp.file("bad.json", R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["tau"]}]})")
+                                   .string();
+  const std::vector<BuildStatus> result = builder.buildAll(
+      {{bad_urdf, false, fastSpec(tmp, "crba"), ""}, {arm7(), false, bad_spec, ""}, {arm7(), false, (tmp / "none.json").string(), ""}});
+  for (const BuildStatus& s : result) EXPECT_EQ(s.state, BuildState::Failed);
+  EXPECT_NE(result[0].message.find("bad.urdf"), std::string::npos) << result[0].message;
+  EXPECT_NE(result[1].message.find("tau"), std::string::npos) << result[1].message;
+  EXPECT_NE(result[2].message.find("none.json"), std::string::npos) << result[2].message;
+  EXPECT_EQ(pool.stats().succeeded + pool.stats().failed, 0u);
+}
+
+}  // namespace
+}  // namespace robodiff::workers
