@@ -74,6 +74,16 @@ int lockPin(const fs::path& object_dir, int operation) {
 
 std::string shortKey(const std::string& key) { return key.substr(0, 12); }
 
+// Binds the six text fields of EntryInfo, in their column order, from `first` on.
+Statement& bindInfo(Statement& st, int first, const EntryInfo& info) {
+  return st.bind(first, info.model_hash)
+      .bind(first + 1, info.robot)
+      .bind(first + 2, info.function)
+      .bind(first + 3, info.spec)
+      .bind(first + 4, info.sizes)
+      .bind(first + 5, info.compiler);
+}
+
 }  // namespace
 
 Cache::Cache(std::unique_ptr<State> state) : state_(std::move(state)) {}
@@ -219,18 +229,12 @@ ClaimResult Cache::claim(const std::string& key, const EntryInfo& info) {
         }
         // Free, or left by a process that is dead or stopped renewing: ours now.
         const Claim c{key, newOwnerToken()};
-        Statement(s.db->handle(),
-                  "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, created, "
-                  "last_used, owner, lease_expires_ms) VALUES (?, 'building', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
-                  "ON CONFLICT (key) DO UPDATE SET owner = excluded.owner, lease_expires_ms = excluded.lease_expires_ms, "
-                  "created = excluded.created")
-            .bind(1, key)
-            .bind(2, info.model_hash)
-            .bind(3, info.robot)
-            .bind(4, info.function)
-            .bind(5, info.spec)
-            .bind(6, info.sizes)
-            .bind(7, info.compiler)
+        Statement insert(s.db->handle(),
+                         "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, created, "
+                         "last_used, owner, lease_expires_ms) VALUES (?, 'building', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+                         "ON CONFLICT (key) DO UPDATE SET owner = excluded.owner, "
+                         "lease_expires_ms = excluded.lease_expires_ms, created = excluded.created");
+        bindInfo(insert.bind(1, key), 2, info)
             .bind(8, now_ms / 1000)
             .bind(9, now_ms / 1000)
             .bind(10, c.owner)
@@ -293,6 +297,18 @@ fs::path Cache::stagingDir(const Claim& claim) {
 
 namespace {
 
+// Removes a ready entry whose pin we hold exclusively (fd, or -1 when it has no pin
+// file): unindexed first, then its files, so a reader never finds a row without them.
+void dropEntry(Cache::State& s, const std::string& key, int fd) {
+  s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ?").bind(1, key).run(); });
+  const fs::path dir = s.objectDir(key);
+  const fs::path doomed = s.staging() / (key + ".evicted." + std::to_string(unixMilliseconds()));
+  std::error_code ec;
+  fs::rename(dir, doomed, ec);
+  if (fd >= 0) ::close(fd);
+  removeTreeQuietly(ec ? dir : doomed);
+}
+
 // Evicts least-recently-used, unpinned ready entries (never `keep`) until `bytes_needed`
 // more fit in `budget`. Returns whether they fit. Caller holds the mutex.
 bool makeRoom(Cache::State& s, std::uint64_t budget, std::uint64_t bytes_needed, const std::string& keep,
@@ -309,13 +325,7 @@ bool makeRoom(Cache::State& s, std::uint64_t budget, std::uint64_t bytes_needed,
       ++report.kept_in_use;
       continue;
     }
-    // Unindex first, then remove the files: a reader never finds a row without them.
-    s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ?").bind(1, e.key).run(); });
-    const fs::path doomed = s.staging() / (e.key + ".evicted." + std::to_string(unixMilliseconds()));
-    std::error_code ec;
-    fs::rename(dir, doomed, ec);
-    if (fd >= 0) ::close(fd);
-    removeTreeQuietly(ec ? dir : doomed);
+    dropEntry(s, e.key, fd);
     total -= std::min(total, e.total_bytes);
     report.freed_bytes += e.total_bytes;
     report.evicted.push_back(e.key);
@@ -387,7 +397,7 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
       fsyncDirectory(target.parent_path());
       const std::int64_t now = unixSeconds();
       s.db->immediate([&] {
-        Statement(s.db->handle(),
+        Statement insert(s.db->handle(),
                   "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, "
                   "library_bytes, total_bytes, library_sha256, created, last_used, hits, owner, lease_expires_ms) "
                   "VALUES (?, 'ready', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, '', 0) "
@@ -396,14 +406,8 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
                   "compiler = excluded.compiler, build_seconds = excluded.build_seconds, "
                   "library_bytes = excluded.library_bytes, total_bytes = excluded.total_bytes, "
                   "library_sha256 = excluded.library_sha256, created = excluded.created, "
-                  "last_used = excluded.last_used, hits = 0, owner = '', lease_expires_ms = 0")
-            .bind(1, claim.key)
-            .bind(2, info.model_hash)
-            .bind(3, info.robot)
-            .bind(4, info.function)
-            .bind(5, info.spec)
-            .bind(6, info.sizes)
-            .bind(7, info.compiler)
+                  "last_used = excluded.last_used, hits = 0, owner = '', lease_expires_ms = 0");
+        bindInfo(insert.bind(1, claim.key), 2, info)
             .bind(8, info.build_seconds)
             .bind(9, static_cast<std::int64_t>(library_bytes))
             .bind(10, static_cast<std::int64_t>(total_bytes))
@@ -554,12 +558,7 @@ bool Cache::remove(const std::string& key) {
   if (fd < 0 && fs::exists(dir / "pin"))
     throw CacheError(CacheError::Kind::InUse, "cache entry " + key + " (" + row->info.robot + "/" + row->info.function +
                                                   ") is loaded by a running process; it can be removed once released");
-  s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ?").bind(1, key).run(); });
-  const fs::path doomed = s.staging() / (key + ".evicted." + std::to_string(unixMilliseconds()));
-  std::error_code ec;
-  fs::rename(dir, doomed, ec);
-  if (fd >= 0) ::close(fd);
-  removeTreeQuietly(ec ? dir : doomed);
+  dropEntry(s, key, fd);
   return true;
 }
 

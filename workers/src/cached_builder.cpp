@@ -238,7 +238,9 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
         JobCallbacks callbacks;
         callbacks.on_start = [&, i](pid_t) {
           std::lock_guard inner(mutex);
-          if (!isFinal(work[i].status.state)) setState(i, BuildState::Building);
+          if (isFinal(work[i].status.state)) return;
+          work[i].started = Clock::now();  // from here on, seconds is the build's own time
+          setState(i, BuildState::Building);
         };
         callbacks.on_progress = [&, i](const std::string& message) {
           std::string stage;

@@ -46,7 +46,7 @@ struct BuildStatus {
   std::string key;
   std::string stage;     // Building: "model", "trace", "compile", "publish"
   std::string message;   // Failed: the reason (the compiler's first lines included); Waiting: who builds it
-  double seconds = 0;    // since this target was started (final: how long it took)
+  double seconds = 0;    // since a worker took it (before: since buildAll began); final: how long it took
   std::uint64_t library_bytes = 0;
 };
 
