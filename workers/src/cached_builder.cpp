@@ -275,18 +275,18 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
       }
     }
     if (all_final) break;
-    // Sleep until a job finishes or the next poll of keys other processes build.
-    std::optional<std::shared_future<JobResult>> any;
-    {
-      std::lock_guard lock(mutex);
-      for (const Work& w : work)
-        if (w.job) any = w.job->result;
-    }
-    if (any) {
-      // Wake early when the job finishes; other finishing jobs are seen on the next round.
-      any->wait_for(options_.poll_interval);
-    } else {
-      std::this_thread::sleep_for(options_.poll_interval);
+    // Sleep until a job finishes (checked every 10 ms, so the display never shows a
+    // finished job as building) or the next poll of keys other processes build.
+    const auto next_poll = Clock::now() + options_.poll_interval;
+    while (Clock::now() < next_poll) {
+      bool finished = false;
+      {
+        std::lock_guard lock(mutex);
+        for (const Work& w : work)
+          if (w.job && w.job->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) finished = true;
+      }
+      if (finished) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   }
 

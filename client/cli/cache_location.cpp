@@ -1,0 +1,24 @@
+#include "cache_location.hpp"
+
+#include "human_units.hpp"
+
+namespace robodiff::cli {
+
+std::filesystem::path cacheDirFor(const std::string& cache_flag) {
+  return cache_flag.empty() ? cache::defaultCacheDir() : std::filesystem::path(cache_flag);
+}
+
+cache::Cache openCliCache(const std::filesystem::path& dir, const std::string& budget_flag, bool create) {
+  cache::CacheOptions options;
+  options.create = create;
+  if (!budget_flag.empty()) options.budget_bytes = parseSize(budget_flag);
+  try {
+    return cache::Cache::open(dir, options);
+  } catch (const cache::CacheError& e) {
+    const std::string message = e.what();
+    if (message.find(dir.string()) != std::string::npos) throw;
+    throw cache::CacheError(e.kind(), "cache " + dir.string() + ": " + message);
+  }
+}
+
+}  // namespace robodiff::cli
