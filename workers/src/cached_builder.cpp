@@ -132,9 +132,12 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
       r.compiler = options_.compiler;
       r.compiler_memory_limit_bytes = options_.compiler_memory_limit_bytes;
       r.compiler_timeout = options_.job_timeout;
-      // Parts of one library compile in parallel when there are more cores than workers.
+      // Each build may compile as many parts at once as there are cores, even with several
+      // workers: while one worker traces (one core), another's compilers use the rest.
+      // Measured (bench/cache_bench, Panda set, 2 cores, 2 workers): cores/workers parts
+      // at once 4.45 s, cores parts at once 3.74 s; 1 worker 4.0 s.
       const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-      r.compiler_jobs = std::max(1u, cores / std::max(1u, pool_.options().workers));
+      r.compiler_jobs = cores;
       r.cache_dir = cache_.dir().string();
       r.cache_budget_bytes = cache_.options().budget_bytes;
       r.info = w.prepared->info;
