@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # The main job, from a fresh Debian 12 machine: install what is missing, build, and show
 # robodiff working. For now that is `robodiff compute` on the project's own robots (and
-# on the Panda arm when ../shared is present), and the engine: a function generated,
-# compiled and cross-checked; later the service and a client.
+# on the Panda arm when ../shared is present), the engine (a function generated,
+# compiled and cross-checked) and the cache (functions built by worker processes, then
+# found again); later the service and a client.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 deploy/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j"$(nproc)" --target robodiff_cli
+cmake --build build -j"$(nproc)" --target robodiff_cli robodiff_worker
 
 rd=build/bin/robodiff
 arm=examples/robots/arm7.urdf
@@ -32,6 +33,17 @@ echo "== the engine: RNEA and its Jacobian d tau/d[q, v, a] generated as C, comp
 show generate --urdf "$arm" --spec examples/specs/rnea_jacobian.json --out "$out"
 show check --urdf "$arm" --spec examples/specs/rnea_jacobian.json --samples 5
 show check --urdf "$quad" --floating-base --spec examples/specs/aba_jacobian.json --samples 3
+
+cache=build/run-cache
+rm -rf "$cache"
+echo
+echo "== the cache: three functions built by worker processes, then found again (key = content)"
+show warmup --urdf "$arm" --spec examples/specs/rnea_jacobian.json --spec examples/specs/aba_jacobian.json \
+  --spec examples/specs/crba.json --jobs 2 --cache "$cache"
+show warmup --urdf "$arm" --spec examples/specs/rnea_jacobian.json --spec examples/specs/aba_jacobian.json \
+  --spec examples/specs/crba.json --jobs 2 --cache "$cache"
+show cache ls --cache "$cache"
+show cache verify --cache "$cache"
 
 panda=../shared/robots/panda_arm_fixed_fingers.urdf
 if [ -f "$panda" ]; then
