@@ -1,0 +1,31 @@
+// Starting one robodiff-worker process, and describing how one ended.
+//
+// The worker leads its own session (so everything it starts can be found and killed,
+// orphans included), dies with the thread that started it (PR_SET_PDEATHSIG), gets the
+// default dispositions of the terminal signals, and inherits nothing of the caller but
+// its stdin and stdout pipes.
+#pragma once
+
+#include <sys/types.h>
+
+#include <filesystem>
+#include <string>
+
+namespace robodiff::workers {
+
+struct WorkerProcess {
+  pid_t pid = -1;
+  int to_worker = -1;    // the worker's stdin (write end)
+  int from_worker = -1;  // the worker's stdout (read end)
+};
+
+// Forks and executes `executable`. Throws std::runtime_error naming the program and the
+// reason when it cannot be started or executed.
+WorkerProcess startWorkerProcess(const std::filesystem::path& executable);
+
+// "worker 123 was killed by signal 9 (SIGKILL) during the job", or its exit status.
+std::string describeWorkerExit(pid_t pid, int status);
+
+bool isExecutableFile(const std::filesystem::path& path);
+
+}  // namespace robodiff::workers
