@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "codegen_fixtures.hpp"
 
 namespace robodiff::codegen {
@@ -68,6 +70,32 @@ TEST(Interpreter, IsCompact) {
   const Interpreter interpreter(g, f);
   EXPECT_EQ(interpreter.instructionCount(), 600u + 2u);
   EXPECT_LE(interpreter.workSize(), 300u + 3u + 2u);  // constants, scratch, two locals
+}
+
+// Many independent columns (as in a Jacobian): the scheduler groups instructions of one
+// opcode, so a dispatch runs many of them, and the results stay those of Graph::evaluate.
+// The output block is mostly structural zeros (cleared at once) and starts out as NaN.
+TEST(Interpreter, GroupsIndependentInstructionsOfOneOpcode) {
+  Graph g;
+  const int n = 40;
+  std::vector<NodeId> values(4 * n, g.constant(0.0));
+  for (int i = 0; i < n; ++i) {
+    const NodeId x = g.input(i), y = g.input((i + 1) % n);
+    const NodeId p = g.binary(Op::Mul, x, g.constant(1.0 + 0.01 * i));
+    const NodeId q = g.binary(Op::Add, g.binary(Op::Mul, p, y), g.unary(Op::Sin, x));
+    values[4 * i] = g.binary(Op::Sub, g.binary(Op::Mul, q, q), g.binary(Op::Mul, p, g.unary(Op::Cos, y)));
+  }
+  FunctionDefinition f{"wide", {{"x", static_cast<std::uint32_t>(n)}}, {OutputBlock::dense("y", 4 * n, 1, values)}};
+  const Interpreter interpreter(g, f);
+  EXPECT_LE(interpreter.groupCount() * 10, interpreter.instructionCount());
+  std::vector<double> work(interpreter.workSize());
+  const auto in = randomInputs(f, 1, 7);
+  auto out = outputBuffers(f, 1);
+  for (double& x : out[0]) x = std::nan("");
+  interpreter.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
+  const auto expected = reference(g, f, in, 0);
+  for (std::size_t i = 0; i < out[0].size(); ++i)
+    ASSERT_TRUE(closeRelative(out[0][i], expected[0][i])) << "[" << i << "]: " << out[0][i] << " vs " << expected[0][i];
 }
 
 TEST(Interpreter, RejectsABadDefinition) {

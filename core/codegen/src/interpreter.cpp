@@ -198,6 +198,43 @@ class Assembler {
   std::map<std::uint64_t, std::uint32_t> constant_slot_;
 };
 
+
+// What an instruction reads and writes, in slots. Entries of the scheduled stream
+// list these fields in this order: writes first, then reads, then block/index.
+struct Shape {
+  int reads = 0, writes = 0;
+};
+
+Shape shapeOf(Code c) {
+  switch (c) {
+    case Code::Load: return {0, 1};
+    case Code::Store:
+    case Code::StoreNeg: return {1, 0};
+    case Code::Zero:
+    case Code::End: return {0, 0};
+    case Code::SinCos: return {1, 2};
+    case Code::Neg: case Code::Sin: case Code::Cos: case Code::Tan: case Code::Asin: case Code::Acos:
+    case Code::Atan: case Code::Exp: case Code::Log: case Code::Sqrt: case Code::Tanh: case Code::Abs:
+      return {1, 1};
+    case Code::Select: case Code::MulAdd: case Code::MulSub: case Code::SubMul: return {3, 1};
+    default: return {2, 1};
+  }
+}
+
+// Scheduling. The assembled program is straight-line code whose slots are reused by
+// liveness; dispatch (one indirect, often mispredicted jump per instruction) dominates
+// its time. Any order that respects the data flow computes every value with the same
+// operations on the same operands, so results are bit-identical; we pick one that puts
+// instructions of one opcode together (greedy list scheduling: keep emitting the
+// current opcode while any instruction of it is ready, else switch to the opcode with
+// the most ready instructions), so that one dispatch runs a tight loop over many
+// independent instructions. Slots are then reassigned by liveness in the new order.
+struct Node {
+  Code code;
+  std::uint32_t reads[3], writes[2];
+  std::uint32_t block = 0, index = 0;
+};
+
 }  // namespace
 
 Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition function) : function_(std::move(function)) {
@@ -228,10 +265,134 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
       default: fix(ins.dst); fix(ins.a); fix(ins.b); fix(ins.c); break;
     }
   }
+  const std::uint32_t nconst = shift;
+  const std::uint32_t nslots = nconst + Assembler::kScratch + chunk.slots;
+
+  // 1. Values (SSA): constants are values 0 .. nconst-1, every write a new value.
+  std::vector<Node> nodes(code.size());
+  std::vector<std::uint32_t> current(nslots);
+  for (std::uint32_t k = 0; k < nslots; ++k) current[k] = k;  // only constants are read unwritten
+  std::uint32_t values = nconst;
+  for (std::size_t k = 0; k < code.size(); ++k) {
+    const Instruction& ins = code[k];
+    Node& n = nodes[k];
+    n.code = ins.code;
+    const Shape sh = shapeOf(ins.code);
+    switch (ins.code) {
+      case Code::Load: n.block = ins.a; n.index = ins.b; break;
+      case Code::Store:
+      case Code::StoreNeg: n.block = ins.a; n.index = ins.b; n.reads[0] = current[ins.c]; break;
+      case Code::Zero: n.block = ins.a; break;
+      default: {
+        const std::uint32_t src[3] = {ins.a, ins.b, ins.c};
+        for (int r = 0; r < sh.reads; ++r) n.reads[r] = current[src[r]];
+      }
+    }
+    const std::uint32_t dst[2] = {ins.dst, ins.b};
+    for (int w = 0; w < sh.writes; ++w) {
+      n.writes[w] = values++;
+      current[dst[w]] = n.writes[w];
+    }
+  }
+
+  // 2. Greedy list scheduling by opcode. Zero first (before any store of its block).
+  const std::size_t N = nodes.size();
+  std::vector<std::uint32_t> waiting(N, 0);  // unscheduled producers still awaited
+  std::vector<std::vector<std::uint32_t>> consumers(values - nconst);
+  for (std::size_t k = 0; k < N; ++k) {
+    const Shape sh = shapeOf(nodes[k].code);
+    for (int r = 0; r < sh.reads; ++r) {
+      const std::uint32_t x = nodes[k].reads[r];
+      if (x < nconst) continue;
+      consumers[x - nconst].push_back(static_cast<std::uint32_t>(k));
+      ++waiting[k];
+    }
+  }
+  constexpr int kCodes = static_cast<int>(Code::End) + 1;
+  std::array<std::vector<std::uint32_t>, kCodes> ready;  // LIFO per opcode
+  std::array<std::size_t, kCodes> ready_head{};
+  std::vector<std::uint32_t> order;
+  order.reserve(N);
+  for (std::size_t k = 0; k < N; ++k)
+    if (nodes[k].code == Code::Zero) order.push_back(static_cast<std::uint32_t>(k));
+  for (std::size_t k = 0; k < N; ++k)
+    if (nodes[k].code != Code::Zero && waiting[k] == 0) ready[static_cast<int>(nodes[k].code)].push_back(static_cast<std::uint32_t>(k));
+  int cur = -1;
+  while (order.size() < N) {
+    auto avail = [&](int c) { return ready[c].size() - ready_head[c]; };
+    if (cur < 0 || avail(cur) == 0) {
+      cur = -1;
+      for (int c = 0; c < kCodes; ++c)
+        if (avail(c) > 0 && (cur < 0 || avail(c) > avail(cur))) cur = c;
+      if (cur < 0) throw std::logic_error("interpreter: a cycle");
+    }
+    const std::uint32_t k = ready[cur][ready_head[cur]++];  // FIFO: original order among ready ones
+    order.push_back(k);
+    const Shape sh = shapeOf(nodes[k].code);
+    for (int w = 0; w < sh.writes; ++w)
+      for (std::uint32_t c : consumers[nodes[k].writes[w] - nconst])
+        if (--waiting[c] == 0) ready[static_cast<int>(nodes[c].code)].push_back(c);
+  }
+
+  // 3. Slots by liveness in the new order.
+  std::vector<std::uint32_t> last_use(values - nconst, 0), slot(values - nconst, 0);
+  std::vector<char> used(values - nconst, 0);
+  for (std::uint32_t p = 0; p < N; ++p) {
+    const Node& n = nodes[order[p]];
+    const Shape sh = shapeOf(n.code);
+    for (int r = 0; r < sh.reads; ++r)
+      if (n.reads[r] >= nconst) last_use[n.reads[r] - nconst] = p, used[n.reads[r] - nconst] = 1;
+  }
+  std::vector<std::uint32_t> free_slots;
+  std::uint32_t next_slot = nconst;
+  stream_.clear();
+  groups_ = 0;
+  std::size_t count_at = 0;
+  int group_code = -1;
+  for (std::uint32_t p = 0; p < N; ++p) {
+    const Node& n = nodes[order[p]];
+    const Shape sh = shapeOf(n.code);
+    std::uint32_t rs[3] = {0, 0, 0}, ws[2] = {0, 0};
+    for (int r = 0; r < sh.reads; ++r) rs[r] = n.reads[r] < nconst ? n.reads[r] : slot[n.reads[r] - nconst];
+    for (int r = 0; r < sh.reads; ++r) {
+      const std::uint32_t x = n.reads[r];
+      if (x >= nconst && last_use[x - nconst] == p) {
+        last_use[x - nconst] = ~0u;  // freed once even when read twice
+        free_slots.push_back(slot[x - nconst]);
+      }
+    }
+    for (int w = 0; w < sh.writes; ++w) {
+      std::uint32_t s;
+      if (!free_slots.empty()) s = free_slots.back(), free_slots.pop_back();
+      else s = next_slot++;
+      slot[n.writes[w] - nconst] = ws[w] = s;
+    }
+    for (int w = 0; w < sh.writes; ++w)
+      if (!used[n.writes[w] - nconst]) free_slots.push_back(ws[w]);  // never read
+    if (static_cast<int>(n.code) != group_code) {
+      group_code = static_cast<int>(n.code);
+      stream_.push_back(static_cast<std::uint32_t>(n.code));
+      count_at = stream_.size();
+      stream_.push_back(0);
+      ++groups_;
+    }
+    ++stream_[count_at];
+    for (int w = 0; w < sh.writes; ++w) stream_.push_back(ws[w]);
+    for (int r = 0; r < sh.reads; ++r) stream_.push_back(rs[r]);
+    if (n.code == Code::Load || n.code == Code::Store || n.code == Code::StoreNeg) {
+      stream_.push_back(n.block);
+      stream_.push_back(n.index);
+    } else if (n.code == Code::Zero) {
+      stream_.push_back(n.block);
+    }
+  }
+  stream_.push_back(static_cast<std::uint32_t>(Code::End));
+  stream_.push_back(0);
+
   code.push_back({Code::End, 0, 0, 0, 0});
   code_ = std::move(code);
   constants_ = std::move(constants);
-  work_size_ = constants_.size() + Assembler::kScratch + chunk.slots;
+  work_size_ = next_slot;
 }
 
 void Interpreter::evaluate(const double* const* in, double* const* out, double* work) const { run(0, in, out, work); }
@@ -240,58 +401,87 @@ void Interpreter::evaluateBatch(std::uint64_t n, const double* const* in, double
   for (std::uint64_t k = 0; k < n; ++k) run(k, in, out, work);
 }
 
-// Each operation's effect on the slots v, given the instruction i. One place, used by
-// the dispatch loop below.
+// Each operation: its stream entry's width (uint32 fields) and its effect on the
+// slots v, given the entry e (writes, then reads, then block and index).
 #define ROBODIFF_INTERPRETER_OPS(OP)                                        \
-  OP(Load, v[i->dst] = in[i->a][knot * in_size[i->a] + i->b])               \
-  OP(Store, out[i->a][knot * out_size[i->a] + i->b] = v[i->c])              \
-  OP(StoreNeg, out[i->a][knot * out_size[i->a] + i->b] = -v[i->c])          \
-  OP(Zero, std::memset(out[i->a] + knot * out_size[i->a], 0, out_size[i->a] * sizeof(double))) \
-  OP(Neg, v[i->dst] = -v[i->a])                                             \
-  OP(Sin, v[i->dst] = std::sin(v[i->a]))                                    \
-  OP(Cos, v[i->dst] = std::cos(v[i->a]))                                    \
-  OP(SinCos, ::sincos(v[i->a], &v[i->dst], &v[i->b]))                       \
-  OP(Tan, v[i->dst] = std::tan(v[i->a]))                                    \
-  OP(Asin, v[i->dst] = std::asin(v[i->a]))                                  \
-  OP(Acos, v[i->dst] = std::acos(v[i->a]))                                  \
-  OP(Atan, v[i->dst] = std::atan(v[i->a]))                                  \
-  OP(Exp, v[i->dst] = std::exp(v[i->a]))                                    \
-  OP(Log, v[i->dst] = std::log(v[i->a]))                                    \
-  OP(Sqrt, v[i->dst] = std::sqrt(v[i->a]))                                  \
-  OP(Tanh, v[i->dst] = std::tanh(v[i->a]))                                  \
-  OP(Abs, v[i->dst] = std::fabs(v[i->a]))                                   \
-  OP(Add, v[i->dst] = v[i->a] + v[i->b])                                    \
-  OP(Sub, v[i->dst] = v[i->a] - v[i->b])                                    \
-  OP(Mul, v[i->dst] = v[i->a] * v[i->b])                                    \
-  OP(Div, v[i->dst] = v[i->a] / v[i->b])                                    \
-  OP(Atan2, v[i->dst] = std::atan2(v[i->a], v[i->b]))                       \
-  OP(Pow, v[i->dst] = std::pow(v[i->a], v[i->b]))                           \
-  OP(Min, v[i->dst] = std::fmin(v[i->a], v[i->b]))                          \
-  OP(Max, v[i->dst] = std::fmax(v[i->a], v[i->b]))                          \
-  OP(Select, v[i->dst] = v[i->a] > 0 ? v[i->b] : v[i->c])                 \
-  OP(MulAdd, v[i->dst] = v[i->a] * v[i->b] + v[i->c])                       \
-  OP(MulSub, v[i->dst] = v[i->a] * v[i->b] - v[i->c])                       \
-  OP(SubMul, v[i->dst] = v[i->c] - v[i->a] * v[i->b])
+  OP(Load, 3, v[e[0]] = in[e[1]][knot * in_size[e[1]] + e[2]])              \
+  OP(Store, 3, out[e[1]][knot * out_size[e[1]] + e[2]] = v[e[0]])            \
+  OP(StoreNeg, 3, out[e[1]][knot * out_size[e[1]] + e[2]] = -v[e[0]])        \
+  OP(Zero, 1, std::memset(out[e[0]] + knot * out_size[e[0]], 0, out_size[e[0]] * sizeof(double))) \
+  OP(Neg, 2, v[e[0]] = -v[e[1]])                                             \
+  OP(Sin, 2, v[e[0]] = std::sin(v[e[1]]))                                    \
+  OP(Cos, 2, v[e[0]] = std::cos(v[e[1]]))                                    \
+  OP(SinCos, 3, ::sincos(v[e[2]], &v[e[0]], &v[e[1]]))                       \
+  OP(Tan, 2, v[e[0]] = std::tan(v[e[1]]))                                    \
+  OP(Asin, 2, v[e[0]] = std::asin(v[e[1]]))                                  \
+  OP(Acos, 2, v[e[0]] = std::acos(v[e[1]]))                                  \
+  OP(Atan, 2, v[e[0]] = std::atan(v[e[1]]))                                  \
+  OP(Exp, 2, v[e[0]] = std::exp(v[e[1]]))                                    \
+  OP(Log, 2, v[e[0]] = std::log(v[e[1]]))                                    \
+  OP(Sqrt, 2, v[e[0]] = std::sqrt(v[e[1]]))                                  \
+  OP(Tanh, 2, v[e[0]] = std::tanh(v[e[1]]))                                  \
+  OP(Abs, 2, v[e[0]] = std::fabs(v[e[1]]))                                   \
+  OP(Add, 3, v[e[0]] = v[e[1]] + v[e[2]])                                    \
+  OP(Sub, 3, v[e[0]] = v[e[1]] - v[e[2]])                                    \
+  OP(Mul, 3, v[e[0]] = v[e[1]] * v[e[2]])                                    \
+  OP(Div, 3, v[e[0]] = v[e[1]] / v[e[2]])                                    \
+  OP(Atan2, 3, v[e[0]] = std::atan2(v[e[1]], v[e[2]]))                       \
+  OP(Pow, 3, v[e[0]] = std::pow(v[e[1]], v[e[2]]))                           \
+  OP(Min, 3, v[e[0]] = std::fmin(v[e[1]], v[e[2]]))                          \
+  OP(Max, 3, v[e[0]] = std::fmax(v[e[1]], v[e[2]]))                          \
+  OP(Select, 4, v[e[0]] = v[e[1]] > 0 ? v[e[2]] : v[e[3]])                   \
+  OP(MulAdd, 4, v[e[0]] = v[e[1]] * v[e[2]] + v[e[3]])                       \
+  OP(MulSub, 4, v[e[0]] = v[e[1]] * v[e[2]] - v[e[3]])                       \
+  OP(SubMul, 4, v[e[0]] = v[e[3]] - v[e[1]] * v[e[2]])
+
+const char* Interpreter::name(Code code) {
+#define ROBODIFF_NAME(name, width, body) #name,
+  static const char* const names[] = {ROBODIFF_INTERPRETER_OPS(ROBODIFF_NAME) "End"};
+#undef ROBODIFF_NAME
+  return names[static_cast<int>(code)];
+}
 
 void Interpreter::run(std::uint64_t knot, const double* const* in, double* const* out, double* v) const {
   if (!constants_.empty()) std::memcpy(v, constants_.data(), constants_.size() * sizeof(double));
   const std::uint32_t* in_size = input_sizes_.data();
   const std::uint32_t* out_size = output_sizes_.data();
-  const Instruction* i = code_.data();
-  // Direct threading (GNU computed goto): one indirect jump per instruction, each
-  // predicted on its own, no bounds check. code_ ends with an End instruction.
-#define ROBODIFF_LABEL(name, body) &&op_##name,
+  const std::uint32_t* p = stream_.data();
+#ifdef __GNUC__
+  // Direct threading (GNU computed goto): one indirect jump per group, then a loop
+  // over the group's entries. stream_ ends with an End group.
+#define ROBODIFF_LABEL(name, width, body) &&op_##name,
   static const void* const labels[] = {ROBODIFF_INTERPRETER_OPS(ROBODIFF_LABEL) && op_End};
 #undef ROBODIFF_LABEL
-  goto* labels[static_cast<int>(i->code)];
-#define ROBODIFF_BODY(name, body) \
-  op_##name : body;               \
-  ++i;                            \
-  goto* labels[static_cast<int>(i->code)];
+  goto* labels[p[0]];
+#define ROBODIFF_BODY(name, width, body)                                   \
+  op_##name : {                                                            \
+    const std::uint32_t* e = p + 2;                                        \
+    const std::uint32_t* const stop = e + std::size_t{p[1]} * (width);     \
+    _Pragma("GCC unroll 4") for (; e != stop; e += (width)) body;          \
+    p = stop;                                                              \
+  }                                                                        \
+  goto* labels[p[0]];
   ROBODIFF_INTERPRETER_OPS(ROBODIFF_BODY)
 #undef ROBODIFF_BODY
 op_End:
   return;
+#else
+  for (;;) {
+    const std::uint32_t* e = p + 2;
+    switch (static_cast<Code>(p[0])) {
+#define ROBODIFF_CASE(name, width, body)                                   \
+  case Code::name: {                                                       \
+    const std::uint32_t* const stop = e + std::size_t{p[1]} * (width);     \
+    for (; e != stop; e += (width)) body;                                  \
+    p = stop;                                                              \
+    break;                                                                 \
+  }
+      ROBODIFF_INTERPRETER_OPS(ROBODIFF_CASE)
+#undef ROBODIFF_CASE
+      case Code::End: return;
+    }
+  }
+#endif
 }
 
 }  // namespace robodiff::codegen

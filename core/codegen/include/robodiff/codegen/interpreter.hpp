@@ -1,7 +1,11 @@
 // The interpreter: a function evaluated the moment it is traced, before (or instead
 // of) compiling it. The graph is lowered exactly as for the C code (only the needed
 // nodes, negations folded, sin/cos paired, slots reused by liveness) into a compact
-// instruction array, run by one loop.
+// instruction array. That array is then scheduled (any order respecting the data flow:
+// results stay bit-identical) so that instructions of one opcode come together, slots
+// reassigned by liveness in that order, and run as groups: one dispatch, then a tight
+// loop over the group's independent entries (Panda RNEA Jacobian: 6787 instructions in
+// 264 groups), instead of one mispredicted indirect jump per instruction.
 //
 // Same conventions as a compiled function (abi.h): one pointer per input and output
 // block, a caller-provided work buffer of workSize() doubles, no allocation, const and
@@ -42,6 +46,11 @@ class Interpreter {
     Code code;
     std::uint32_t dst, a, b, c;
   };
+  // The instructions as lowered and assembled (End last), before scheduling.
+  const std::vector<Instruction>& code() const { return code_; }
+  // Dispatches per evaluation: runs of one opcode after scheduling (End not counted).
+  std::size_t groupCount() const { return groups_; }
+  static const char* name(Code code);  // "MulAdd"
 
  private:
   void run(std::uint64_t knot, const double* const* in, double* const* out, double* v) const;
@@ -50,6 +59,10 @@ class Interpreter {
   std::vector<std::uint32_t> input_sizes_, output_sizes_;
   std::vector<double> constants_;  // copied to v[0 ..) at the start of each evaluation
   std::vector<Instruction> code_;
+  // What run() executes: groups [code, n, n entries of operandsOf(code) slot numbers]
+  // ..., then End. Each group is one dispatch and a tight loop over its entries.
+  std::vector<std::uint32_t> stream_;
+  std::size_t groups_ = 0;
   std::size_t work_size_ = 0;
 };
 
