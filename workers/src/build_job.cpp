@@ -1,11 +1,9 @@
 #include "robodiff/workers/build_job.hpp"
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <new>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -312,34 +310,9 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
     cache_options.create = false;  // the requester made it; a missing one is an error
     cache::Cache cache = cache::Cache::open(request.cache_dir, cache_options);
     staging = cache.stagingDir(request.claim);
-    const fs::path out_dir = staging / "build";
 
-    // generateFunctionLibrary's steps one by one, so that each stage is reported.
-    stage("trace");
-    BuiltFunction built = buildFunction(model, spec, options.builder);
-    GeneratedFunctionLibrary generated;
-    const auto emit_started = Clock::now();
-    const codegen::GeneratedLibrary sources = codegen::generateLibrary(*built.graph, {built.definition}, options.codegen);
-    generated.emit_seconds = std::chrono::duration<double>(Clock::now() - emit_started).count();
-    generated.info = sources.functions.at(0);
-    for (const codegen::SourceFile& s : sources.sources) generated.source_bytes += s.text.size();
-
-    stage("compile");
-    fs::create_directories(out_dir);
-    codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
-    if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());
-    compiler.build_dir = out_dir / "src";
-    compiler.keep_build_dir = true;
-    const std::string& name = built.definition.name;
-    generated.library = out_dir / (name + ".so");
-    generated.compile = codegen::compileLibrary(sources, generated.library, compiler);
-    generated.library_bytes = fs::file_size(generated.library);
-    generated.description = out_dir / (name + ".json");
-    {
-      std::ofstream description(generated.description, std::ios::binary);
-      description << describeFunction(model, spec, built, &generated) << "\n";
-      if (!description.flush()) throw std::runtime_error("cannot write " + generated.description.string());
-    }
+    options.on_stage = stage;
+    const GeneratedFunctionLibrary generated = generateFunctionLibrary(model, spec, staging / "build", options);
 
     stage("publish");
     cache::EntryInfo info = request.info;
@@ -349,12 +322,12 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
     if (info.function.empty()) info.function = known.function;
     if (info.spec.empty()) info.spec = known.spec;
     if (info.compiler.empty()) info.compiler = known.compiler;
-    info.sizes = blockSizes(built.definition);
+    info.sizes = blockSizes(generated.built.definition);
     info.build_seconds = std::chrono::duration<double>(Clock::now() - started).count();
     cache::ArtifactFiles files;
     files.library = generated.library;
     files.description = generated.description;
-    files.sources = sourceFiles(compiler.build_dir);
+    files.sources = sourceFiles(generated.library.parent_path() / "src");
     cache.publish(request.claim, info, files);
 
     outcome.ok = true;

@@ -53,7 +53,11 @@ void writeFile(const fs::path& path, const std::string& text) {
 
 GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const FunctionSpec& spec, const fs::path& out_dir,
                                                  const LibraryOptions& options) {
+  auto stage = [&](const char* name) {
+    if (options.on_stage) options.on_stage(name);
+  };
   GeneratedFunctionLibrary result;
+  stage("trace");
   result.built = buildFunction(model, spec, options.builder);
   const std::string& name = result.built.definition.name;
 
@@ -63,6 +67,7 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   result.info = sources.functions.at(0);
   for (const codegen::SourceFile& s : sources.sources) result.source_bytes += s.text.size();
 
+  stage("compile");
   fs::create_directories(out_dir);
   codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
   if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());

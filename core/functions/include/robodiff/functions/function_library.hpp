@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "robodiff/codegen/c_emitter.hpp"
@@ -24,6 +25,9 @@ struct LibraryOptions {
   // Compiler, limits and jobs. The optimisation level, -march=native and -ffast-math
   // come from the spec's build options (compilerOptionsFor), not from here.
   codegen::CompilerOptions compiler;
+  // Told each step as it starts: "trace" (build the function), then "compile" (emit C done,
+  // compiler running). Build workers report it as progress.
+  std::function<void(const char* stage)> on_stage;
 
   static codegen::CodegenOptions defaultCodegenOptions();
 };
