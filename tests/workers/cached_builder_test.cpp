@@ -23,6 +23,7 @@
 #include "robodiff/workers/worker_pool.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
+#include "worker_fixtures.hpp"
 
 namespace robodiff::workers {
 namespace {
@@ -52,25 +53,6 @@ WorkerPoolOptions poolOptions(unsigned workers = 1) {
   o.worker_executable = testing::workerPath();
   o.workers = workers;
   return o;
-}
-
-bool waitFor(const std::function<bool()>& condition, std::chrono::seconds limit) {
-  const auto deadline = Clock::now() + limit;
-  while (Clock::now() < deadline) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return condition();
-}
-
-bool processExists(pid_t pid) {
-  if (::kill(pid, 0) != 0) return false;
-  // A zombie (killed, not yet reaped by its new parent) is gone for our purposes.
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  std::getline(stat, text);
-  const auto close = text.rfind(')');
-  return close == std::string::npos || text.substr(close + 2, 1) != "Z";
 }
 
 std::size_t filesUnder(const fs::path& dir) {
@@ -120,7 +102,7 @@ TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""}};
 
   auto running = std::async(std::launch::async, [&] { return builder.buildAll(targets); });
-  ASSERT_TRUE(waitFor([&] { return fs::exists(pid_file) && fs::file_size(pid_file) > 0; }, std::chrono::seconds(60)))
+  ASSERT_TRUE(testing::waitFor([&] { return fs::exists(pid_file) && fs::file_size(pid_file) > 0; }, std::chrono::seconds(60)))
       << "the compiler never started";
   const pid_t compiler = std::stoi(testing::readFile(pid_file));
   const pid_t worker = pool.workers().at(0).pid;
@@ -136,11 +118,11 @@ TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   EXPECT_FALSE(fs::exists(tmp / "cache" / "objects" / result[0].key.substr(0, 2) / result[0].key));
   EXPECT_EQ(filesUnder(tmp / "cache" / "objects"), 0u);
   EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
-  EXPECT_TRUE(waitFor([&] { return !processExists(compiler); }, std::chrono::seconds(10)))
+  EXPECT_TRUE(testing::waitFor([&] { return testing::processIsDead(compiler); }, std::chrono::seconds(10)))
       << "compiler " << compiler << " outlived its worker";
 
   // The pool replaced the worker; the same key builds with a working compiler.
-  EXPECT_TRUE(waitFor([&] { return pool.workers().at(0).pid != worker && pool.workers().at(0).pid > 0; },
+  EXPECT_TRUE(testing::waitFor([&] { return pool.workers().at(0).pid != worker && pool.workers().at(0).pid > 0; },
                       std::chrono::seconds(10)));
   CachedBuilder working(cache, pool);
   const std::vector<BuildStatus> again = working.buildAll(targets);
