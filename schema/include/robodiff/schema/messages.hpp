@@ -1,0 +1,207 @@
+#pragma once
+// The service's messages in C++: one struct per IDL type of schema/robodiff.idl, with the
+// same fields in the same order. Transports convert between these and their wire form
+// (dds_codec.hpp: the idlc-generated C types; shm_codec.hpp: flat shared-memory chunks);
+// the server and the client work only with these.
+//
+// Evaluate and EvaluateBatch carry their doubles outside these structs (spans over the
+// transport's buffers) so that iceoryx can serve them without copying the payload; see
+// server/service_api.hpp and client/connection.hpp.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robodiff/schema/status.hpp"
+
+namespace robodiff::rpc {
+
+enum class Method : std::uint32_t {  // robodiff_wire_Method
+  LoadModel = 0,
+  GetFunction = 1,
+  Evaluate = 2,
+  EvaluateBatch = 3,
+  ListFunctions = 4,
+  Health = 5,
+  Release = 6,
+};
+inline constexpr std::uint32_t kMethodCount = 7;
+const char* toString(Method method);  // "LoadModel", ...
+
+struct SchemaVersion {
+  std::uint16_t major = kSchemaVersionMajor;
+  std::uint16_t minor = kSchemaVersionMinor;
+};
+
+struct RequestHeader {
+  SchemaVersion schema_version;
+  std::string client_id;               // unique per client process / instance
+  std::uint64_t correlation_id = 0;    // unique per client
+  std::uint64_t deadline_budget_ns = 0;  // relative, from when the server takes it; 0 = none
+  std::string server_instance_id;      // empty = any server
+};
+
+struct ReplyHeader {
+  SchemaVersion schema_version;        // the server's
+  std::string server_instance_id;
+  std::string client_id;
+  std::uint64_t correlation_id = 0;
+  Status status;
+};
+
+// ---- LoadModel ----------------------------------------------------------------------
+
+struct LoadModelRequest {
+  std::string urdf;                    // URDF text
+  bool floating_base = false;
+  std::string options_json;            // empty = defaults
+};
+
+struct LoadModelReply {
+  std::string model_id;                // canonical hash (hex)
+  std::vector<std::string> joint_names;
+  std::vector<std::string> frame_names;
+  std::uint32_t nq = 0, nv = 0;
+};
+
+// ---- GetFunction --------------------------------------------------------------------
+
+enum class FunctionState : std::uint32_t { Ready = 0, Building = 1, Failed = 2 };
+enum class OutputKind : std::uint32_t { Value = 0, Jacobian = 1, Hessian = 2 };
+enum class OutputLayout : std::uint32_t { DenseRowMajor = 0, SparseCsr = 1 };
+const char* toString(FunctionState state);  // "READY", "BUILDING", "FAILED"
+
+struct InputBlock {
+  std::string name;
+  std::uint32_t size = 0;              // doubles
+};
+
+struct OutputBlock {
+  std::string name;
+  OutputKind kind = OutputKind::Value;
+  std::uint32_t rows = 0, cols = 0;
+  OutputLayout layout = OutputLayout::DenseRowMajor;
+  std::uint32_t nnz = 0;               // doubles written (rows * cols when dense)
+  std::vector<std::uint32_t> row_offsets;  // sparse: rows + 1
+  std::vector<std::uint32_t> col_indices;  // sparse: nnz
+};
+
+struct GetFunctionRequest {
+  std::string model_id;
+  std::string spec_json;
+  bool wait = false;                   // reply when READY / FAILED (or at the deadline)
+};
+
+struct GetFunctionReply {
+  std::string function_id;
+  FunctionState state = FunctionState::Building;
+  std::vector<InputBlock> inputs;      // in evaluation order
+  std::vector<OutputBlock> outputs;    // in evaluation order
+};
+
+// Doubles per knot in and out, as the blocks above add up.
+std::uint32_t inputCount(const GetFunctionReply& function);
+std::uint32_t outputCount(const GetFunctionReply& function);
+
+// ---- Evaluate / EvaluateBatch (headers only: the doubles travel beside them) ---------
+
+struct EvaluateRequest {
+  std::string function_id;
+  std::vector<double> inputs;          // used where a transport copies (DDS); concatenated blocks
+};
+
+struct EvaluateReply {
+  std::vector<double> outputs;
+};
+
+struct EvaluateBatchRequest {
+  std::string function_id;
+  std::uint32_t knot_count = 0;
+  std::vector<double> inputs;          // knot_count knots, each the concatenated blocks
+};
+
+struct EvaluateBatchReply {
+  std::uint32_t chunk_index = 0, chunk_count = 1;
+  std::uint32_t total_knots = 0, first_knot = 0, knot_count = 0;
+  std::vector<double> outputs;
+};
+
+// ---- ListFunctions ------------------------------------------------------------------
+
+struct ListFunctionsRequest {
+  std::string model_id;                // empty = all
+};
+
+struct FunctionSummary {
+  std::string function_id;
+  std::string model_id;
+  std::string function_name;
+  FunctionState state = FunctionState::Building;
+  bool compiled = false;               // false while the interpreter serves it
+  std::uint64_t evaluations = 0;       // knots evaluated
+  std::string message;                 // FAILED: why
+};
+
+struct ListFunctionsReply {
+  std::vector<FunctionSummary> functions;
+};
+
+// ---- Release ------------------------------------------------------------------------
+
+// Each LoadModel / GetFunction that returns an id takes a reference; Release gives one
+// back. A function keeps its model alive; an unreferenced function is unloaded.
+struct ReleaseRequest {
+  std::string id;                      // a model_id or a function_id
+};
+
+struct ReleaseReply {
+  std::uint32_t references_left = 0;
+};
+
+// ---- Health -------------------------------------------------------------------------
+
+enum class ServingState : std::uint32_t { Starting = 0, Serving = 1, Draining = 2 };
+const char* toString(ServingState state);  // "STARTING", "SERVING", "DRAINING"
+
+struct HealthRequest {
+  bool verbose = false;
+};
+
+struct MethodStats {
+  Method method = Method::Health;
+  std::uint64_t requests = 0;
+  std::uint64_t errors = 0;            // non-OK replies
+  std::uint64_t p50_ns = 0, p90_ns = 0, p99_ns = 0, max_ns = 0;  // server-side latency
+};
+
+struct StatusCount {
+  StatusCode code = StatusCode::Ok;
+  std::uint64_t count = 0;
+};
+
+struct TransportCounts {
+  std::string transport;               // "iceoryx", "dds"
+  std::uint64_t requests = 0;
+  std::uint64_t errors = 0;
+};
+
+struct HealthReply {
+  ServingState state = ServingState::Starting;
+  std::string version;
+  std::string server_instance_id;
+  std::uint64_t uptime_ns = 0;
+  std::uint32_t models_loaded = 0;
+  std::uint32_t functions_loaded = 0;
+  std::uint32_t functions_compiled = 0;
+  std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
+  std::uint64_t cache_hits = 0, cache_misses = 0;
+  std::uint64_t cache_bytes = 0, cache_entries = 0;
+  std::uint32_t workers_total = 0, workers_busy = 0;
+  std::uint32_t queue_depth = 0, queue_capacity = 0;       // requests waiting for a server thread
+  std::uint32_t batch_threads = 0;
+  std::vector<MethodStats> methods;    // one per method, in Method order
+  std::vector<StatusCount> errors;     // non-OK codes seen, with counts
+  std::vector<TransportCounts> transports;
+};
+
+}  // namespace robodiff::rpc

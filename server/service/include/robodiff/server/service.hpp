@@ -1,0 +1,82 @@
+#pragma once
+// The service itself: a registry of models and functions, evaluation on the cached
+// libraries (the interpreter serves a function from the moment it is traced until its
+// compiled library is ready, then the library is swapped in), builds through the cache
+// and the worker pool, batches spread over threads, a bounded request queue, deadlines,
+// draining, and the figures Health reports. Transports call it through ServiceApi.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "robodiff/server/log.hpp"
+#include "robodiff/server/service_api.hpp"
+
+namespace robodiff::server {
+
+struct ServiceOptions {
+  std::filesystem::path cache_dir;           // empty: cache::defaultCacheDir()
+  std::uint64_t cache_budget_bytes = std::uint64_t{4} << 30;
+  unsigned build_workers = 1;                // worker processes compiling libraries
+  std::string worker_executable;             // empty: workers::defaultWorkerExecutable()
+  std::string compiler;                      // empty: $CC or cc
+  std::chrono::milliseconds build_timeout = std::chrono::minutes(15);
+  std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
+  bool compile = true;                       // false: the interpreter serves every function
+  unsigned request_threads = 2;              // run posted requests (LoadModel, GetFunction, ...)
+  std::size_t request_queue_capacity = 256;  // posted requests waiting; beyond: RESOURCE_EXHAUSTED
+  unsigned batch_threads = 0;                // EvaluateBatch pieces in parallel; 0: the cores
+  std::uint32_t max_batch_knots = 100000;    // beyond: RESOURCE_EXHAUSTED
+  std::size_t max_models = 64;               // beyond: RESOURCE_EXHAUSTED
+  std::size_t max_functions = 1024;
+  std::size_t max_urdf_bytes = std::size_t{16} << 20;  // beyond: INVALID_ARGUMENT
+  std::string instance_id;                   // empty: "<host>:<pid>:<random>"
+  std::string version = "0.1.0";             // reported by Health
+};
+
+class Service final : public ServiceApi {
+ public:
+  // Opens the cache and starts the worker pool and the threads. Throws
+  // cache::CacheError / std::runtime_error with a message a person can act on.
+  Service(ServiceOptions options, Logger& log);
+  ~Service() override;  // drains (waits for in-flight work) and stops everything
+  Service(const Service&) = delete;
+  Service& operator=(const Service&) = delete;
+
+  // Serving from now on (Health: STARTING -> SERVING).
+  void markServing();
+  // SIGTERM: from now on admit() answers UNAVAILABLE; in-flight requests continue.
+  void beginDrain();
+  // True when no request is in flight or queued (waits up to `timeout` for that).
+  bool waitIdle(std::chrono::milliseconds timeout);
+  rpc::ServingState state() const;
+
+  const ServiceOptions& options() const;
+
+  // ServiceApi
+  const std::string& instanceId() const override;
+  Status admit(const rpc::RequestHeader& header) const override;
+  Status loadModel(const CallContext& ctx, const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply) override;
+  Status getFunction(const CallContext& ctx, const rpc::GetFunctionRequest& request,
+                     rpc::GetFunctionReply& reply) override;
+  Status listFunctions(const CallContext& ctx, const rpc::ListFunctionsRequest& request,
+                       rpc::ListFunctionsReply& reply) override;
+  Status health(const CallContext& ctx, const rpc::HealthRequest& request, rpc::HealthReply& reply) override;
+  Status release(const CallContext& ctx, const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply) override;
+  Status shape(std::string_view function_id, FunctionShape& shape) override;
+  Status evaluate(const CallContext& ctx, std::string_view function_id, std::span<const double> inputs,
+                  std::span<double> outputs) override;
+  Status evaluateBatch(const CallContext& ctx, std::string_view function_id, std::uint64_t knots,
+                       std::span<const double> inputs, std::span<double> outputs) override;
+  bool post(std::function<void()> task) override;
+  void recordRequest(std::string_view transport, rpc::Method method, StatusCode code,
+                     std::chrono::nanoseconds latency) override;
+
+ private:
+  struct State;  // service.cpp
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace robodiff::server
