@@ -1,0 +1,183 @@
+// robodiffd: the robodiff service daemon. Reads its configuration (embedded defaults, a
+// file, flags), opens the cache, starts the build workers, serves over iceoryx (starting
+// a RouDi inside the process when none runs) and Cyclone DDS, and on SIGTERM or SIGINT
+// drains: new requests get UNAVAILABLE, requests in flight are answered, then it exits 0.
+//
+// Exit codes: 0 stopped cleanly; 1 could not start (the log says why); 2 bad usage or
+// configuration; 3 drained too slowly (requests were still in flight at the drain timeout).
+#include <pthread.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "robodiff/server/dds_server.hpp"
+#include "robodiff/server/service.hpp"
+#include "robodiff/server/shm_server.hpp"
+#include "server_config.hpp"
+
+namespace {
+
+using namespace robodiff::server;
+
+// Signals are taken by sigwait in main, never by a handler: every thread started below
+// inherits the blocked mask.
+sigset_t blockStopSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  return set;
+}
+
+struct Flags {
+  std::string config_file;
+  std::vector<std::string> sets;
+  std::string cache_dir, instance_id, log_level, log_format, roudi;
+  int workers = -1, dds_domain = -2;
+  bool no_dds = false, no_iceoryx = false, interpreter_only = false, print_config = false;
+  double drain_timeout_s = 30;
+};
+
+void addFlags(CLI::App& app, Flags& f) {
+  app.add_option("--config", f.config_file,
+                 "Configuration file (deploy/robodiffd.conf documents every key); default: built-in defaults, "
+                 "or $ROBODIFFD_CONFIG");
+  app.add_option("--set", f.sets, "Override one setting: section.key=value (repeatable)");
+  app.add_option("--cache", f.cache_dir, "Cache directory (cache.dir)");
+  app.add_option("--workers", f.workers, "Build worker processes (build.workers)");
+  app.add_option("--instance-id", f.instance_id, "This server's id (service.instance_id)");
+  app.add_option("--dds-domain", f.dds_domain, "DDS domain id (dds.domain)");
+  app.add_flag("--no-dds", f.no_dds, "Do not serve over DDS (dds.enabled = false)");
+  app.add_flag("--no-iceoryx", f.no_iceoryx, "Do not serve over iceoryx (iceoryx.enabled = false)");
+  app.add_option("--roudi", f.roudi, "auto | external | embedded (iceoryx.roudi)");
+  app.add_flag("--interpreter-only", f.interpreter_only, "Never compile (build.compile = false)");
+  app.add_option("--log-level", f.log_level, "debug | info | warn | error (log.level)");
+  app.add_option("--log-format", f.log_format, "json | text (log.format)");
+  app.add_option("--drain-timeout", f.drain_timeout_s, "Seconds to answer in-flight requests after SIGTERM (30)");
+  app.add_flag("--print-config", f.print_config, "Print the effective configuration and exit");
+}
+
+ServerConfig configure(const Flags& f) {
+  ServerConfig config;
+  std::string file = f.config_file;
+  if (file.empty())
+    if (const char* env = std::getenv("ROBODIFFD_CONFIG"); env != nullptr && *env != '\0') file = env;
+  if (!file.empty()) applyConfigFile(config, file);
+  for (const std::string& set : f.sets) {
+    const auto eq = set.find('=');
+    if (eq == std::string::npos) throw ConfigError("--set '" + set + "': expected section.key=value");
+    applySetting(config, set.substr(0, eq), set.substr(eq + 1), "--set");
+  }
+  if (!f.cache_dir.empty()) applySetting(config, "cache.dir", f.cache_dir, "--cache");
+  if (f.workers >= 0) applySetting(config, "build.workers", std::to_string(f.workers), "--workers");
+  if (!f.instance_id.empty()) applySetting(config, "service.instance_id", f.instance_id, "--instance-id");
+  if (f.dds_domain != -2) applySetting(config, "dds.domain", std::to_string(f.dds_domain), "--dds-domain");
+  if (f.no_dds) config.dds.enabled = false;
+  if (f.no_iceoryx) config.shm.enabled = false;
+  if (!f.roudi.empty()) applySetting(config, "iceoryx.roudi", f.roudi, "--roudi");
+  if (f.interpreter_only) config.service.compile = false;
+  if (!f.log_level.empty()) applySetting(config, "log.level", f.log_level, "--log-level");
+  if (!f.log_format.empty()) applySetting(config, "log.format", f.log_format, "--log-format");
+  return config;
+}
+
+const char* signalName(int sig) {
+  switch (sig) {
+    case SIGTERM: return "SIGTERM";
+    case SIGINT: return "SIGINT";
+    case SIGHUP: return "SIGHUP";
+  }
+  return "signal";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const sigset_t stop_signals = blockStopSignals();
+
+  CLI::App app{"robodiffd: the robodiff service (derivatives of robot dynamics over iceoryx and DDS)"};
+  Flags flags;
+  addFlags(app, flags);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  ServerConfig config;
+  try {
+    config = configure(flags);
+  } catch (const std::exception& e) {
+    std::cerr << "robodiffd: " << e.what() << "\n";
+    return 2;
+  }
+  if (flags.print_config) {
+    std::cout << formatConfig(config);
+    return 0;
+  }
+  if (!config.shm.enabled && !config.dds.enabled) {
+    std::cerr << "robodiffd: both transports are disabled (iceoryx.enabled and dds.enabled are false); "
+                 "nothing would reach the service\n";
+    return 2;
+  }
+
+  Logger log(stderr, config.log_level, config.log_format);
+  const auto started = std::chrono::steady_clock::now();
+  try {
+    Service service(config.service, log);
+
+    std::unique_ptr<RoudiHandle> roudi;
+    std::unique_ptr<ShmServer> shm;
+    if (config.shm.enabled) {
+      roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
+      ShmServerOptions options;
+      options.service = config.shm.service;
+      shm = std::make_unique<ShmServer>(service, options, log);
+      shm->start();
+    }
+    std::unique_ptr<DdsServer> dds;
+    if (config.dds.enabled) {
+      DdsServerOptions options;
+      options.domain_id = config.dds.domain;
+      options.service_name = config.dds.service;
+      options.max_sample_bytes = config.dds.max_sample_bytes;
+      dds = std::make_unique<DdsServer>(service, options, log);
+      dds->start();
+    }
+    service.markServing();
+    log.info("serving", {{"instance_id", service.instanceId()},
+                         {"iceoryx", config.shm.enabled},
+                         {"dds", config.dds.enabled},
+                         {"dds_domain", static_cast<long long>(config.dds.domain)},
+                         {"startup_seconds",
+                          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()}});
+
+    int sig = 0;
+    sigwait(&stop_signals, &sig);
+    log.info("draining", {{"signal", signalName(sig)}});
+    service.beginDrain();
+    const auto drain_timeout = std::chrono::milliseconds(static_cast<long long>(flags.drain_timeout_s * 1000));
+    const bool idle = service.waitIdle(drain_timeout);
+    if (!idle) log.warn("drain_timeout", {{"seconds", flags.drain_timeout_s}});
+    if (dds) dds->stop();
+    if (shm) shm->stop();
+    dds.reset();
+    shm.reset();
+    roudi.reset();
+    log.info("stopped", {{"clean", idle}});
+    return idle ? 0 : 3;
+  } catch (const std::exception& e) {
+    log.error("startup_failed", {{"message", e.what()}});
+    return 1;
+  }
+}

@@ -1,0 +1,60 @@
+#pragma once
+// robodiffd's configuration: every setting with its default, read from a file
+// (deploy/robodiffd.conf documents each one), then overridden by flags. The defaults are
+// good for one host; with no file at all robodiffd runs on them.
+//
+// File format: "[section]" lines and "key = value" lines; '#' starts a comment; values
+// may be quoted ("..."). Sizes take units (512KiB, 4GiB), durations too (500ms, 30s,
+// 15min). An unknown section or key, or a value that does not parse, is an error naming
+// the file, the line, the key and the value.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robodiff/server/log.hpp"
+#include "robodiff/server/service.hpp"
+
+namespace robodiff::server {
+
+struct ShmSettings {
+  bool enabled = true;
+  std::string service = "robodiff";  // the iceoryx service name
+  std::string roudi = "auto";        // auto | external | embedded
+};
+
+struct DdsSettings {
+  bool enabled = true;
+  std::int32_t domain = -1;          // -1: Cyclone's default (CYCLONEDDS_URI may set it)
+  std::string service = "robodiff";  // topic prefix
+  std::uint64_t max_sample_bytes = 512 * 1024;  // EvaluateBatch replies beyond are split
+};
+
+struct ServerConfig {
+  ServiceOptions service;
+  ShmSettings shm;
+  DdsSettings dds;
+  LogLevel log_level = LogLevel::Info;
+  LogFormat log_format = LogFormat::Json;
+};
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Applies one setting ("service.request_threads", "8"); `where` names its origin in
+// errors ("robodiffd.conf:12", "--set"). Throws ConfigError.
+void applySetting(ServerConfig& config, const std::string& key, const std::string& value, const std::string& where);
+
+// Applies every setting of a configuration text; `source` names it in errors.
+void applyConfigText(ServerConfig& config, const std::string& text, const std::string& source);
+void applyConfigFile(ServerConfig& config, const std::string& path);
+
+// The effective configuration in the file format (every key, with its value).
+std::string formatConfig(const ServerConfig& config);
+
+// Every key, "section.key", in file order.
+std::vector<std::string> configKeys();
+
+}  // namespace robodiff::server
