@@ -1,0 +1,117 @@
+// A real robodiffd for the end-to-end tests: started as a child process on a temporary
+// cache and a DDS domain of this test's own, waited for until it logs "serving", stopped
+// by PID (SIGTERM to drain, SIGKILL to simulate a crash). Its log (JSON lines) is kept in
+// a file so a failing test can show it.
+#pragma once
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/test_paths.hpp"
+
+namespace robodiff::testing {
+
+inline std::filesystem::path robodiffdPath() { return ROBODIFFD_PATH; }
+
+// A DDS domain of this test process's own (ctest runs several at once).
+inline int testDomain() { return 1 + static_cast<int>(getpid() % 200); }
+
+// Points Cyclone DDS at the loopback configuration of deploy/ for this process and its
+// children.
+inline void useLoopbackDds() {
+  const std::string uri = "file://" + (sourceDir() / "deploy/cyclonedds-loopback.xml").string();
+  setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+}
+
+class RobodiffdProcess {
+ public:
+  // Starts robodiffd with `args` (besides --cache, --dds-domain and the log file) and
+  // waits up to `timeout` for it to serve. Fails the test (and returns) if it exits first.
+  RobodiffdProcess(const std::filesystem::path& cache_dir, const std::filesystem::path& log_path,
+                   std::vector<std::string> args = {}, std::chrono::seconds timeout = std::chrono::seconds(60))
+      : log_path_(log_path) {
+    useLoopbackDds();
+    std::vector<std::string> argv_strings = {robodiffdPath().string(), "--cache", cache_dir.string(),
+                                             "--dds-domain", std::to_string(testDomain()), "--log-format", "json"};
+    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
+      if (fd >= 0) {
+        dup2(fd, STDERR_FILENO);
+        dup2(fd, STDOUT_FILENO);
+      }
+      std::vector<char*> argv;
+      for (std::string& s : argv_strings) argv.push_back(s.data());
+      argv.push_back(nullptr);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (log().find("\"event\":\"serving\"") != std::string::npos) return;
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        ADD_FAILURE() << "robodiffd exited before serving (status " << status << "); log:\n" << log();
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ADD_FAILURE() << "robodiffd did not serve within " << timeout.count() << " s; log:\n" << log();
+  }
+
+  ~RobodiffdProcess() { kill(); }
+  RobodiffdProcess(const RobodiffdProcess&) = delete;
+  RobodiffdProcess& operator=(const RobodiffdProcess&) = delete;
+
+  pid_t pid() const { return pid_; }
+  bool running() const { return pid_ > 0; }
+  std::string log() const {
+    std::error_code ec;
+    return std::filesystem::exists(log_path_, ec) ? readFile(log_path_) : std::string();
+  }
+
+  // SIGTERM, then waits for the exit; returns the exit code (-1 on a timeout or a signal).
+  int terminate(std::chrono::seconds timeout = std::chrono::seconds(60)) {
+    if (pid_ <= 0) return -1;
+    ::kill(pid_, SIGTERM);
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    kill();
+    return -1;
+  }
+
+  // SIGKILL (a crash), and reap.
+  void kill() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+  }
+
+ private:
+  std::filesystem::path log_path_;
+  pid_t pid_ = -1;
+};
+
+}  // namespace robodiff::testing
