@@ -302,19 +302,30 @@ TEST_P(EndToEnd, EightConcurrentClients) {
 }
 
 TEST_P(EndToEnd, SigtermDrainsInFlightRequests) {
-  startServer({"--interpreter-only", "--set", "service.batch_threads=1"});
+  startServer({"--interpreter-only"});
   auto c = connectTo(GetParam());
-  const std::string id = loadRneaJacobian(*c);
-  // A batch long enough (interpreted, one thread) to be in flight when SIGTERM comes.
-  constexpr int kKnots = 20000;
-  std::vector<double> ins(kKnots * 21, 0.3), outs(kKnots * 154, std::nan(""));
-  Status batch;
-  std::thread t([&] { batch = c->evaluateBatch(id, kKnots, ins, outs); });
-  std::this_thread::sleep_for(milliseconds(150));
+  rpc::LoadModelRequest load;
+  load.urdf = readFile(sourceDir() / "examples/robots/humanoid.urdf");
+  load.floating_base = true;
+  rpc::LoadModelReply model;
+  ASSERT_TRUE(c->loadModel(load, model).ok());
+  // Tracing the humanoid's ABA Jacobian takes long enough to be in flight when SIGTERM
+  // comes: the request is answered (READY) before robodiffd exits.
+  rpc::GetFunctionRequest get;
+  get.model_id = model.model_id;
+  get.spec_json = R"({"function": "aba", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", "tau"]}]})";
+  get.wait = true;
+  rpc::GetFunctionReply function;
+  Status status;
+  const auto start = std::chrono::steady_clock::now();
+  std::thread t([&] { status = c->getFunction(get, function); });
+  std::this_thread::sleep_for(milliseconds(100));
   ::kill(server_->pid(), SIGTERM);
   t.join();
-  EXPECT_TRUE(batch.ok()) << toString(batch.code) << ": " << batch.message;
-  EXPECT_FALSE(std::isnan(outs.back()));
+  const double seconds_taken = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_TRUE(status.ok()) << toString(status.code) << ": " << status.message;
+  EXPECT_EQ(function.state, rpc::FunctionState::Ready);
+  EXPECT_GT(seconds_taken, 0.1) << "the request should still have been in flight at SIGTERM";
   EXPECT_EQ(server_->terminate(), 0) << log();
   EXPECT_NE(log().find("\"event\":\"draining\""), std::string::npos);
   EXPECT_NE(log().find("\"event\":\"stopped\""), std::string::npos);
