@@ -38,14 +38,15 @@ inline std::unique_ptr<client::Connection> connectTo(const std::string& transpor
                                                      rpc::SchemaVersion version = {}) {
   if (transport == "dds") {
     client::DdsConnectionOptions options;
-    options.domain_id = testDomain();
-    options.default_timeout = timeout;
-    options.schema_version = version;
+    options.domain_id = static_cast<std::uint32_t>(testDomain());
+    options.connection.default_timeout = timeout;
+    options.connection.schema_version = version;
     return client::connectDds(options);
   }
   client::ShmConnectionOptions options;
   options.default_timeout = timeout;
   options.schema_version = version;
+  options.require_server = false;  // a test may start the server after connecting
   return client::connectShm(options);
 }
 
