@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -99,8 +100,9 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
     publishStatus(i);
   };
 
-  // 1. Read every robot and spec, and compute the keys. Robots are loaded once each.
-  std::map<std::pair<std::string, bool>, std::pair<std::string, std::shared_ptr<Model>>> robots;
+  // 1. Read every robot and spec, and compute the keys. Robots are loaded once each
+  // (by path, or by text when given as text).
+  std::map<std::tuple<std::string, bool, std::string>, std::pair<std::string, std::shared_ptr<Model>>> robots;
   for (std::size_t i = 0; i < targets.size(); ++i) {
     Work& w = work[i];
     w.target = targets[i];
@@ -109,14 +111,15 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
     w.status.function = targets[i].spec_path;
     std::lock_guard lock(mutex);
     try {
-      auto& robot = robots[{targets[i].urdf_path, targets[i].floating_base}];
+      auto& robot = robots[{targets[i].urdf_path, targets[i].floating_base, targets[i].urdf_text}];
       if (!robot.second) {
-        robot.first = readText(targets[i].urdf_path, "URDF");
+        robot.first = targets[i].urdf_text.empty() ? readText(targets[i].urdf_path, "URDF") : targets[i].urdf_text;
         robot.second = std::make_shared<Model>(
             loadUrdfString(robot.first, targets[i].floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed,
                            targets[i].urdf_path));
       }
-      const std::string spec_text = readText(targets[i].spec_path, "spec");
+      const std::string spec_text =
+          targets[i].spec_text.empty() ? readText(targets[i].spec_path, "spec") : targets[i].spec_text;
       const FunctionSpec spec = parseFunctionSpec(spec_text, targets[i].spec_path);
       w.prepared = prepareBuild(*robot.second, spec, targets[i].function_name, options_.compiler);
       w.status.robot = w.prepared->info.robot;

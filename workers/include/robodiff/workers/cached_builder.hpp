@@ -20,11 +20,17 @@
 
 namespace robodiff::workers {
 
+// A robot and a spec to build, read from files, or given as text (a server has them
+// in memory): when urdf_text / spec_text is set it is used, and the path then only names
+// the source in messages. (The text fields have initialisers so that brace-initialising
+// only the first four stays free of -Wmissing-field-initializers.)
 struct BuildTarget {
   std::string urdf_path;
   bool floating_base = false;
   std::string spec_path;
   std::string function_name;  // C name; empty: the spec's function
+  std::string urdf_text = {};  // set: the URDF itself (urdf_path is not read)
+  std::string spec_text = {};  // set: the spec's JSON itself (spec_path is not read)
 };
 
 enum class BuildState : std::uint8_t {
