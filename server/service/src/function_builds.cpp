@@ -1,0 +1,242 @@
+#include "function_builds.hpp"
+
+#include <new>
+#include <optional>
+#include <thread>
+
+#include "robodiff/functions/function_builder.hpp"
+#include "robodiff/functions/function_library.hpp"
+#include "robodiff/symbolic/graph.hpp"
+#include "robodiff/workers/build_job.hpp"
+
+namespace robodiff::server::detail {
+namespace {
+
+double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
+  workers::CachedBuilderOptions o;
+  o.compiler = s.compiler;
+  o.compiler_memory_limit_bytes = s.compiler_memory_limit_bytes;
+  o.job_timeout = s.build_timeout;
+  return o;
+}
+
+}  // namespace
+
+FunctionBuilds::FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log)
+    : settings_(std::move(settings)),
+      cache_(cache),
+      pool_(pool),
+      builder_(cache, pool, builderOptions(settings_)),
+      log_(log),
+      compile_queue_("compile", std::max(1u, settings_.compile_threads), 0,
+                     [this](const std::string& what) {
+                       log_.error("internal_error", {{"message", what}});
+                     }),
+      trace_queue_("trace", std::max(1u, settings_.trace_threads), 0, [this](const std::string& what) {
+        log_.error("internal_error", {{"message", what}});
+      }) {}
+
+FunctionBuilds::~FunctionBuilds() { stop(); }
+
+void FunctionBuilds::start(std::shared_ptr<FunctionEntry> function) {
+  FunctionEntry& f = *function;
+  if (!trace_queue_.post([this, function] { trace(function); }))
+    f.fail(StatusCode::Unavailable, "the server is stopping; function " + f.id() + " was not built");
+}
+
+void FunctionBuilds::stop() {
+  if (stopping_.exchange(true)) return;
+  trace_queue_.stop();  // traces not started fail at once (stopping_)
+  // Builds not started are skipped (stopping_); running ones are cancelled (their workers
+  // are killed, the builder abandons their claims) until none is left.
+  while (!compile_queue_.idle()) {
+    cancelRunningBuilds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  compile_queue_.stop();
+}
+
+void FunctionBuilds::cancelRunningBuilds() {
+  for (const workers::WorkerInfo& w : pool_.workers())
+    if (w.job) pool_.cancel(*w.job);
+}
+
+BuildFigures FunctionBuilds::figures() const {
+  BuildFigures f;
+  f.cache_hits = cache_hits_.load(std::memory_order_relaxed);
+  f.cache_misses = cache_misses_.load(std::memory_order_relaxed);
+  f.builds_queued = builds_queued_.load(std::memory_order_relaxed);
+  f.builds_running = builds_running_.load(std::memory_order_relaxed);
+  f.builds_failed = builds_failed_.load(std::memory_order_relaxed);
+  f.builds_done = builds_done_.load(std::memory_order_relaxed);
+  return f;
+}
+
+void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
+  FunctionEntry& f = *function;
+  if (stopping_) {
+    f.fail(StatusCode::Unavailable, "the server stopped before function " + f.id() + " was built; retry after restart");
+    return;
+  }
+  if (f.unloaded()) {
+    f.fail(StatusCode::Cancelled, "function " + f.id() + " was released before it was built");
+    return;
+  }
+  const Model& model = *f.model().model;
+
+  // Compiling: the library may be in the cache already (built by an earlier run, or by
+  // another server sharing the cache).
+  std::string key_problem;
+  if (settings_.compile) {
+    std::optional<workers::PreparedBuild> prepared;
+    try {
+      prepared = workers::prepareBuild(model, f.spec(), "", settings_.compiler);
+    } catch (const std::exception& e) {
+      key_problem = e.what();  // e.g. the compiler cannot be run: the interpreter serves
+    }
+    if (prepared) {
+      if (loadFromCache(function, prepared->key)) return;
+      cache_misses_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+
+  const auto started = Clock::now();
+  std::shared_ptr<const Evaluator> evaluator;
+  std::size_t instructions = 0, nodes = 0;
+  Status failure;
+  try {
+    // The builder's defaults, as the build workers use them: same graph, same layout.
+    const BuiltFunction built = buildFunction(model, f.spec(), LibraryOptions{}.builder);
+    codegen::Interpreter interpreter(*built.graph, built.definition);
+    instructions = interpreter.instructionCount();
+    nodes = built.graph->size();
+    FunctionLayout layout = FunctionLayout::fromDefinition(built.definition, f.spec());
+    evaluator = std::make_shared<const InterpretedEvaluator>(std::move(layout), std::move(interpreter));
+  } catch (const SpecError& e) {
+    failure = {StatusCode::InvalidArgument, e.what()};
+  } catch (const symbolic::GraphTooLarge& e) {
+    failure = {StatusCode::ResourceExhausted, std::string("the function is too large to build: ") + e.what() +
+                                                  "; ask for fewer outputs or derivatives, or use a smaller robot"};
+  } catch (const std::bad_alloc&) {
+    failure = {StatusCode::ResourceExhausted, "out of memory while tracing function " + f.id()};
+  } catch (const std::exception& e) {
+    failure = {StatusCode::Internal, std::string("tracing failed: ") + e.what()};
+  }
+  if (!failure.ok()) {
+    log_.warn("function_failed",
+              {{"function_id", f.id()}, {"code", toString(failure.code)}, {"message", failure.message}});
+    f.fail(failure.code, failure.message);
+    return;
+  }
+  // Counted as queued before it is READY: whoever sees it READY sees its build coming.
+  const bool build = settings_.compile && key_problem.empty();
+  if (build) builds_queued_.fetch_add(1, std::memory_order_relaxed);
+  f.ready(evaluator);
+  log_.info("function_traced", {{"function_id", f.id()},
+                                {"function", f.functionName()},
+                                {"seconds", secondsSince(started)},
+                                {"instructions", instructions},
+                                {"nodes", nodes}});
+
+  if (!settings_.compile) return;
+  if (!build) {
+    buildFailed(function, "the library cannot be built: " + key_problem);
+    return;
+  }
+  if (!compile_queue_.post([this, function] { compile(function); }))
+    builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+}
+
+bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key) {
+  FunctionEntry& f = *function;
+  try {
+    const std::optional<cache::Artifact> artifact = cache_.find(key);
+    if (!artifact) return false;
+    std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
+    cache_hits_.fetch_add(1, std::memory_order_relaxed);
+    f.ready(std::move(compiled));
+    log_.info("function_loaded",
+              {{"function_id", f.id()}, {"function", f.functionName()}, {"key", key}, {"source", "cache"}});
+    return true;
+  } catch (const std::exception& e) {
+    log_.warn("cache_entry_unusable", {{"function_id", f.id()}, {"key", key}, {"message", e.what()}});
+    return false;
+  }
+}
+
+void FunctionBuilds::compile(const std::shared_ptr<FunctionEntry>& function) {
+  FunctionEntry& f = *function;
+  if (stopping_ || f.unloaded()) {
+    builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+    return;
+  }
+  workers::BuildTarget target;
+  target.urdf_path = f.model().source_name;  // names the URDF in the worker's messages
+  target.floating_base = f.model().floating_base;
+  target.spec_path = "spec of function " + f.id();
+  target.urdf_text = f.model().urdf;
+  target.spec_text = f.specText();
+
+  std::atomic<bool> running{false};
+  auto listener = [&](std::size_t, const workers::BuildStatus& s) {
+    if (s.state == workers::BuildState::Building && !running.exchange(true)) {
+      builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+      builds_running_.fetch_add(1, std::memory_order_relaxed);
+    }
+  };
+  workers::BuildStatus status;
+  try {
+    status = builder_.buildAll({target}, listener).at(0);
+  } catch (const std::exception& e) {
+    status.state = workers::BuildState::Failed;
+    status.message = e.what();
+  }
+  if (running)
+    builds_running_.fetch_sub(1, std::memory_order_relaxed);
+  else
+    builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+
+  if (status.state != workers::BuildState::Done && status.state != workers::BuildState::Cached) {
+    buildFailed(function,
+                status.message.empty() ? std::string("the build ended ") + toString(status.state) : status.message);
+    return;
+  }
+  swapIn(function, status);
+}
+
+void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status) {
+  FunctionEntry& f = *function;
+  try {
+    const std::optional<cache::Artifact> artifact = cache_.find(status.key);
+    if (!artifact)
+      throw std::runtime_error("the library " + status.key +
+                               " was built but is no longer in the cache (is the cache budget too small?)");
+    std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
+    if (const std::shared_ptr<const Evaluator> current = f.evaluator()) {
+      const std::string difference = compiled->layout().differenceFrom(current->layout());
+      if (!difference.empty()) throw std::runtime_error("its blocks differ from the traced function's: " + difference);
+    }
+    f.swap(std::move(compiled));
+  } catch (const std::exception& e) {
+    buildFailed(function, std::string("the built library cannot be used: ") + e.what());
+    return;
+  }
+  builds_done_.fetch_add(1, std::memory_order_relaxed);
+  log_.info("function_compiled", {{"function_id", f.id()},
+                                  {"key", status.key},
+                                  {"seconds", status.seconds},
+                                  {"library_bytes", status.library_bytes},
+                                  {"built_here", status.state == workers::BuildState::Done}});
+  log_.info("function_swapped", {{"function_id", f.id()}, {"from", "interpreter"}, {"to", "compiled"}});
+}
+
+void FunctionBuilds::buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message) {
+  FunctionEntry& f = *function;
+  builds_failed_.fetch_add(1, std::memory_order_relaxed);
+  f.setMessage("building the library failed (the interpreter serves this function): " + message);
+  log_.warn("build_failed", {{"function_id", f.id()}, {"function", f.functionName()}, {"message", message}});
+}
+
+}  // namespace robodiff::server::detail

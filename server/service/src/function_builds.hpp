@@ -1,0 +1,78 @@
+#pragma once
+// How a new function becomes servable, off the request threads:
+//   1. trace stage (its own threads): with compiling on, look in the cache first; a hit
+//      loads the library (READY, compiled). A miss traces the function and serves it with
+//      the interpreter at once (READY, interpreted), then hands it to
+//   2. compile stage (one thread per build worker, one library build per function; the
+//      worker pool queues them): the CachedBuilder builds the library into the cache;
+//      on success it is loaded and swapped in, on failure the interpreter keeps serving
+//      and the failure is logged, counted and kept as the function's message.
+// stop() fails functions not traced yet (UNAVAILABLE), skips builds not started and
+// cancels the running ones.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "function_entry.hpp"
+#include "robodiff/cache/cache.hpp"
+#include "robodiff/server/log.hpp"
+#include "robodiff/workers/cached_builder.hpp"
+#include "robodiff/workers/worker_pool.hpp"
+#include "task_queue.hpp"
+
+namespace robodiff::server::detail {
+
+struct BuildSettings {
+  bool compile = true;
+  std::string compiler;
+  std::chrono::milliseconds build_timeout = std::chrono::minutes(15);
+  std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
+  unsigned trace_threads = 2;
+  unsigned compile_threads = 1;
+};
+
+struct BuildFigures {
+  std::uint64_t cache_hits = 0, cache_misses = 0;
+  std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
+};
+
+class FunctionBuilds {
+ public:
+  FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log);
+  ~FunctionBuilds();  // stop()
+  FunctionBuilds(const FunctionBuilds&) = delete;
+  FunctionBuilds& operator=(const FunctionBuilds&) = delete;
+
+  // Starts making `function` (BUILDING) servable.
+  void start(std::shared_ptr<FunctionEntry> function);
+  void stop();
+
+  BuildFigures figures() const;
+
+ private:
+  void trace(const std::shared_ptr<FunctionEntry>& function);
+  bool loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
+  void compile(const std::shared_ptr<FunctionEntry>& function);
+  void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status);
+  void buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message);
+  void cancelRunningBuilds();
+
+  BuildSettings settings_;
+  cache::Cache& cache_;
+  workers::WorkerPool& pool_;
+  workers::CachedBuilder builder_;
+  Logger& log_;
+  std::atomic<bool> stopping_{false};
+
+  std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};
+  std::atomic<std::uint32_t> builds_queued_{0}, builds_running_{0}, builds_failed_{0}, builds_done_{0};
+
+  // Last: their threads use everything above and are joined first.
+  TaskQueue compile_queue_;
+  TaskQueue trace_queue_;
+};
+
+}  // namespace robodiff::server::detail

@@ -1,0 +1,35 @@
+#pragma once
+// Latencies of one method as a fixed log-scale histogram: 8 buckets per power of two
+// (each bucket at most 9% wide), lock-free (relaxed atomic counters), so recording costs
+// a few instructions on a transport's hot path. Percentiles are read off the buckets
+// (the bucket's upper bound, never above the largest latency seen).
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+
+namespace robodiff::server::detail {
+
+class LatencyHistogram {
+ public:
+  void record(std::uint64_t ns);
+
+  std::uint64_t count() const { return count_.load(std::memory_order_relaxed); }
+  std::uint64_t max() const { return max_.load(std::memory_order_relaxed); }
+  // The latency under which `fraction` (0..1) of the recorded ones fall; 0 when none.
+  std::uint64_t percentile(double fraction) const;
+
+  // Bucket arithmetic, exposed for tests: index of a value, and a bucket's largest value.
+  static std::size_t bucketOf(std::uint64_t ns);
+  static std::uint64_t upperBound(std::size_t bucket);
+
+  static constexpr unsigned kSubBits = 3;  // 2^3 = 8 buckets per power of two
+  static constexpr std::size_t kBuckets = (64 - kSubBits + 1) << kSubBits;
+
+ private:
+  std::array<std::atomic<std::uint64_t>, kBuckets> buckets_{};
+  std::atomic<std::uint64_t> count_{0};
+  std::atomic<std::uint64_t> max_{0};
+};
+
+}  // namespace robodiff::server::detail

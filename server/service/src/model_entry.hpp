@@ -1,0 +1,29 @@
+#pragma once
+// A loaded model: the robot as LoadModel received it (the URDF text is kept: a compiled
+// build loads it again in a worker process) and as loaded. Immutable except the counts,
+// which the registry guards.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "robodiff/model/model.hpp"
+
+namespace robodiff::server::detail {
+
+struct ModelEntry {
+  std::string id;           // canonical hash (hex)
+  std::string urdf;         // the text first loaded under this id
+  std::string source_name;  // names the URDF in messages (options_json "source_name")
+  bool floating_base = false;
+  std::shared_ptr<const Model> model;
+  std::vector<std::string> joint_names;  // moving joints, in model order
+  std::vector<std::string> frame_names;
+
+  // Guarded by the registry's mutex.
+  std::uint32_t references = 0;  // LoadModel calls not yet released
+  std::uint32_t functions = 0;   // loaded functions of this model (they keep it loaded)
+};
+
+}  // namespace robodiff::server::detail

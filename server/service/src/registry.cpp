@@ -1,0 +1,117 @@
+#include "registry.hpp"
+
+#include <algorithm>
+#include <mutex>
+
+namespace robodiff::server::detail {
+
+Status Registry::addModel(std::shared_ptr<ModelEntry> candidate, std::size_t max_models, Added& added) {
+  std::unique_lock lock(mutex_);
+  auto it = models_.find(candidate->id);
+  if (it == models_.end()) {
+    if (models_.size() >= max_models)
+      return {StatusCode::ResourceExhausted, std::to_string(models_.size()) +
+                                                 " models are loaded, the most this server allows (max_models); "
+                                                 "release models no longer used (Release with their model_id)"};
+    it = models_.emplace(candidate->id, std::move(candidate)).first;
+    added.created = true;
+  }
+  added.model = it->second;
+  added.references = ++it->second->references;
+  return {};
+}
+
+Status Registry::addFunction(std::string_view model_id, const std::string& function_id, std::size_t max_functions,
+                             const MakeFunction& make, Added& added) {
+  std::unique_lock lock(mutex_);
+  const auto model = models_.find(model_id);
+  if (model == models_.end())
+    return {StatusCode::NotFound, "unknown model id " + std::string(model_id) +
+                                      " (never loaded on this server, or released); call LoadModel first"};
+  auto it = functions_.find(function_id);
+  if (it == functions_.end()) {
+    if (functions_.size() >= max_functions)
+      return {StatusCode::ResourceExhausted,
+              std::to_string(functions_.size()) +
+                  " functions are loaded, the most this server allows "
+                  "(max_functions); release functions no longer used (Release with their function_id)"};
+    it = functions_.emplace(function_id, make(model->second, next_sequence_++)).first;
+    ++model->second->functions;
+    added.created = true;
+  }
+  added.model = model->second;
+  added.function = it->second;
+  added.references = ++it->second->references;
+  return {};
+}
+
+std::shared_ptr<FunctionEntry> Registry::findFunction(std::string_view function_id) const {
+  std::shared_lock lock(mutex_);
+  const auto it = functions_.find(function_id);
+  return it == functions_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<ModelEntry> Registry::findModel(std::string_view model_id) const {
+  std::shared_lock lock(mutex_);
+  const auto it = models_.find(model_id);
+  return it == models_.end() ? nullptr : it->second;
+}
+
+Status Registry::release(std::string_view id, Released& released) {
+  std::unique_lock lock(mutex_);
+  // A model no longer referenced, nor used by a function, goes. Caller holds the lock.
+  auto dropModelIfUnused = [&](const std::string& model_id) {
+    const auto m = models_.find(model_id);
+    if (m != models_.end() && m->second->references == 0 && m->second->functions == 0) {
+      released.model_unloaded = m->second;
+      models_.erase(m);
+    }
+  };
+  if (const auto f = functions_.find(id); f != functions_.end()) {
+    released.was_function = true;
+    std::shared_ptr<FunctionEntry> function = f->second;
+    released.references_left = --function->references;
+    if (function->references == 0) {
+      functions_.erase(f);
+      function->markUnloaded();
+      released.function_unloaded = function;
+      if (const auto m = models_.find(function->model().id); m != models_.end()) --m->second->functions;
+      dropModelIfUnused(function->model().id);
+    }
+    return {};
+  }
+  if (const auto m = models_.find(id); m != models_.end()) {
+    if (m->second->references == 0)
+      return {StatusCode::NotFound, "model " + std::string(id) + " has no references left to release (" +
+                                        std::to_string(m->second->functions) +
+                                        " loaded functions keep it loaded until they are released)"};
+    released.references_left = --m->second->references;
+    dropModelIfUnused(m->second->id);
+    return {};
+  }
+  return {StatusCode::NotFound, "unknown id " + std::string(id) +
+                                    ": no model or function with this id is loaded (never loaded, or released)"};
+}
+
+std::vector<std::shared_ptr<FunctionEntry>> Registry::functions(std::optional<std::string_view> model_id) const {
+  std::vector<std::shared_ptr<FunctionEntry>> out;
+  {
+    std::shared_lock lock(mutex_);
+    for (const auto& [id, f] : functions_)
+      if (!model_id || f->model().id == *model_id) out.push_back(f);
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a->sequence() < b->sequence(); });
+  return out;
+}
+
+std::size_t Registry::modelCount() const {
+  std::shared_lock lock(mutex_);
+  return models_.size();
+}
+
+std::size_t Registry::functionCount() const {
+  std::shared_lock lock(mutex_);
+  return functions_.size();
+}
+
+}  // namespace robodiff::server::detail

@@ -1,0 +1,72 @@
+#pragma once
+// The models and functions loaded, with their references: LoadModel and GetFunction
+// take one, Release gives one back. A function keeps its model loaded; a function
+// without references is unloaded (evaluations in flight keep their evaluator alive).
+// Lookups by id take a shared lock (evaluation's hot path); changes take it exclusively.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <shared_mutex>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "function_entry.hpp"
+#include "model_entry.hpp"
+#include "robodiff/schema/status.hpp"
+
+namespace robodiff::server::detail {
+
+struct StringHash {
+  using is_transparent = void;
+  std::size_t operator()(std::string_view s) const noexcept { return std::hash<std::string_view>{}(s); }
+};
+
+class Registry {
+ public:
+  struct Added {
+    std::shared_ptr<ModelEntry> model;        // addModel
+    std::shared_ptr<FunctionEntry> function;  // addFunction
+    bool created = false;                     // new, not another reference to a loaded one
+    std::uint32_t references = 0;             // after this one
+  };
+
+  // A reference to the model with candidate->id: the loaded one, or the candidate when
+  // none is (RESOURCE_EXHAUSTED when max_models are loaded).
+  Status addModel(std::shared_ptr<ModelEntry> candidate, std::size_t max_models, Added& added);
+  // A reference to function `function_id` of model `model_id`: the loaded one, or the
+  // one `make` creates (NOT_FOUND for an unknown model, RESOURCE_EXHAUSTED past
+  // max_functions).
+  using MakeFunction =
+      std::function<std::shared_ptr<FunctionEntry>(std::shared_ptr<const ModelEntry>, std::uint64_t sequence)>;
+  Status addFunction(std::string_view model_id, const std::string& function_id, std::size_t max_functions,
+                     const MakeFunction& make, Added& added);
+
+  std::shared_ptr<FunctionEntry> findFunction(std::string_view function_id) const;
+  std::shared_ptr<ModelEntry> findModel(std::string_view model_id) const;
+
+  struct Released {
+    std::uint32_t references_left = 0;
+    std::shared_ptr<FunctionEntry> function_unloaded;  // its last reference went
+    std::shared_ptr<ModelEntry> model_unloaded;        // unloaded with it, or by itself
+    bool was_function = false;
+  };
+  // NOT_FOUND for an id that is not loaded or has no references left.
+  Status release(std::string_view id, Released& released);
+
+  // Loaded functions in order of creation; those of one model when model_id is set.
+  std::vector<std::shared_ptr<FunctionEntry>> functions(std::optional<std::string_view> model_id = std::nullopt) const;
+  std::size_t modelCount() const;
+  std::size_t functionCount() const;
+
+ private:
+  mutable std::shared_mutex mutex_;
+  std::unordered_map<std::string, std::shared_ptr<ModelEntry>, StringHash, std::equal_to<>> models_;
+  std::unordered_map<std::string, std::shared_ptr<FunctionEntry>, StringHash, std::equal_to<>> functions_;
+  std::uint64_t next_sequence_ = 0;
+};
+
+}  // namespace robodiff::server::detail

@@ -1,0 +1,61 @@
+#pragma once
+// Service::State: everything a Service owns, in the order it is built (and the reverse
+// of the order it goes): the cache, the worker pool, the registry, the builds, the
+// batch threads, the request threads. Shared by service.cpp (requests, lifetime),
+// service_evaluation.cpp (the hot path) and service_health.cpp (figures).
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "batch_runner.hpp"
+#include "function_builds.hpp"
+#include "registry.hpp"
+#include "request_stats.hpp"
+#include "robodiff/cache/cache.hpp"
+#include "robodiff/server/service.hpp"
+#include "robodiff/workers/worker_pool.hpp"
+#include "task_queue.hpp"
+
+namespace robodiff::server {
+
+struct Service::State {
+  State(ServiceOptions options, Logger& log);
+
+  ServiceOptions options;
+  Logger& log;
+  std::string instance_id;
+  Clock::time_point started = Clock::now();
+  std::atomic<rpc::ServingState> serving{rpc::ServingState::Starting};
+  std::atomic<std::uint64_t> in_flight{0};  // requests being served (posted ones included)
+
+  cache::Cache cache;
+  workers::WorkerPool pool;
+  detail::Registry registry;
+  detail::RequestStats stats;
+  detail::FunctionBuilds builds;
+  detail::BatchRunner batch;
+  detail::TaskQueue requests;  // last: its threads call into everything above
+};
+
+// Counts a request in flight for as long as it lives (waitIdle and draining wait for 0).
+class InFlight {
+ public:
+  explicit InFlight(std::atomic<std::uint64_t>& count) : count_(count) {
+    count_.fetch_add(1, std::memory_order_acq_rel);
+  }
+  ~InFlight() { count_.fetch_sub(1, std::memory_order_acq_rel); }
+  InFlight(const InFlight&) = delete;
+  InFlight& operator=(const InFlight&) = delete;
+
+ private:
+  std::atomic<std::uint64_t>& count_;
+};
+
+namespace detail {
+inline constexpr const char* kShuttingDown =
+    "robodiffd is shutting down (SIGTERM); retry against another server or after restart";
+Status deadlineExceeded(const CallContext& ctx, const char* method);
+}  // namespace detail
+
+}  // namespace robodiff::server
