@@ -1,0 +1,414 @@
+// The iceoryx client: one port, a receive thread dispatching responses to waiting calls.
+#include "robodiff/client/shm_connection.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <semaphore>
+#include <thread>
+#include <unordered_map>
+
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
+#include "iceoryx_posh/popo/rpc_header.hpp"
+#include "iceoryx_posh/popo/untyped_client.hpp"
+#include "iceoryx_posh/popo/wait_set.hpp"
+#include "robodiff/schema/shm_codec.hpp"
+#include "robodiff/schema/shm_runtime.hpp"
+
+namespace robodiff::client {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+constexpr auto kSpin = 50us;  // how long a call polls for its reply before it sleeps
+
+const char* loanError(iox::popo::AllocationError error) {
+  switch (error) {
+    case iox::popo::AllocationError::RUNNING_OUT_OF_CHUNKS: return "the shared-memory pool of that size is used up";
+    case iox::popo::AllocationError::TOO_MANY_CHUNKS_ALLOCATED_IN_PARALLEL: return "too many requests being written at once";
+    case iox::popo::AllocationError::NO_MEMPOOLS_AVAILABLE: return "RouDi has no mempool";
+    default: return "iceoryx could not allocate it";
+  }
+}
+
+std::string serviceName(const std::string& service) { return "robodiff/" + service + "/rpc"; }
+
+std::string milliseconds(std::chrono::nanoseconds d) {
+  return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(d).count()) + " ms";
+}
+
+}  // namespace
+
+struct ShmConnection::Impl {
+  ShmConnectionOptions options;
+  std::string client_id;
+  std::atomic<std::uint64_t> next_correlation{1};
+
+  mutable std::mutex port_mutex;  // the iceoryx client port is not thread-safe
+  std::unique_ptr<iox::popo::UntypedClient> port;
+  std::unique_ptr<iox::popo::WaitSet<>> waitset;
+  std::thread receiver;
+  std::atomic<bool> running{false};
+
+  // Calls waiting for their reply, by correlation id.
+  struct Pending {
+    const void* response = nullptr;  // the response chunk, handed over by the receive thread
+    std::atomic<bool> done{false};  // set under pending_mutex; read without it while spinning
+    Status failure;                  // when done without a response
+  };
+  std::mutex pending_mutex;
+  std::condition_variable pending_cv;
+  std::unordered_map<std::uint64_t, Pending*> pending;
+
+  // iceoryx lets a client hold at most 4 loaned, unsent requests (bodies are written
+  // outside the port mutex, so more callers could be between loan and send).
+  std::counting_semaphore<iox::MAX_REQUESTS_ALLOCATED_SIMULTANEOUSLY> loans{iox::MAX_REQUESTS_ALLOCATED_SIMULTANEOUSLY};
+
+  // At most max_in_flight calls between send and reply (iceoryx keeps 16 responses per client).
+  std::mutex slot_mutex;
+  std::condition_variable slot_cv;
+  std::uint32_t slots_used = 0;
+
+  bool connected() const {
+    std::lock_guard lock(port_mutex);
+    return port->getConnectionState() == iox::ConnectionState::CONNECTED;
+  }
+
+  Status noServer() const {
+    return {StatusCode::Unavailable, "no robodiff server offers iceoryx service " + serviceName(options.service) +
+                                         " (is robodiffd running with iceoryx enabled?)"};
+  }
+
+  void releaseResponse(const void* response) {
+    std::lock_guard lock(port_mutex);
+    port->releaseResponse(response);
+  }
+
+  void failAll(const Status& status) {
+    std::lock_guard lock(pending_mutex);
+    bool any = false;
+    for (auto& [id, p] : pending) {
+      if (p->done) continue;
+      p->done = true;
+      p->failure = status;
+      any = true;
+    }
+    if (any) pending_cv.notify_all();
+  }
+
+  void receiveLoop() {
+    while (running.load()) {
+      waitset->timedWait(iox::units::Duration::fromMilliseconds(20));
+      if (!running.load()) break;
+      for (;;) {
+        const void* response = nullptr;
+        {
+          std::lock_guard lock(port_mutex);
+          auto taken = port->take();
+          if (taken.has_error()) break;
+          response = taken.value();
+        }
+        dispatch(response);
+      }
+      if (!connected()) failAll({StatusCode::Unavailable, "the robodiff server went away (iceoryx service " +
+                                                              serviceName(options.service) + " is no longer offered)"});
+    }
+  }
+
+  // Takes one response, if there is one and the port is free, and dispatches it.
+  bool pollOnce() {
+    const void* response = nullptr;
+    {
+      std::unique_lock lock(port_mutex, std::try_to_lock);
+      if (!lock.owns_lock()) return false;
+      auto taken = port->take();
+      if (taken.has_error()) return false;
+      response = taken.value();
+    }
+    dispatch(response);
+    return true;
+  }
+
+  // Hands a response to the call it answers: iceoryx gives the response the request's
+  // sequence id, which is the request's correlation id.
+  void dispatch(const void* response) {
+    const auto id = static_cast<std::uint64_t>(iox::popo::ResponseHeader::fromPayload(response)->getSequenceId());
+    {
+      std::lock_guard lock(pending_mutex);
+      auto it = pending.find(id);
+      if (it != pending.end() && !it->second->done) {
+        it->second->response = response;
+        it->second->done = true;
+        pending_cv.notify_all();
+        return;
+      }
+    }
+    releaseResponse(response);  // its caller gave up (timeout)
+  }
+
+  // One call: loan a request of chunkSize(0, body_size) bytes, let `fill` write the body,
+  // send, wait for the reply, let `on_reply` read an OK reply's body.
+  template <class Fill, class OnReply>
+  Status call(rpc::Method method, std::uint64_t body_size, CallOptions call_options, Fill&& fill, OnReply&& on_reply) {
+    const auto timeout = call_options.timeout.count() > 0 ? call_options.timeout : options.default_timeout;
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(timeout);
+    const std::uint64_t size = shm::chunkSize(0, body_size);
+    if (size > options.max_chunk_payload)
+      return {StatusCode::ResourceExhausted, std::string(rpc::toString(method)) + " request of " + std::to_string(size) +
+                                                 " bytes exceeds the iceoryx transport's limit of " +
+                                                 std::to_string(options.max_chunk_payload) +
+                                                 " bytes (the largest shared-memory pool); nothing was sent"};
+    {
+      std::unique_lock lock(slot_mutex);
+      if (!slot_cv.wait_until(lock, deadline, [&] { return slots_used < options.max_in_flight; }))
+        return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply within " +
+                                                  milliseconds(timeout) + " (the call waited for a free slot)"};
+      ++slots_used;
+    }
+    struct SlotGuard {
+      Impl& d;
+      ~SlotGuard() {
+        std::lock_guard lock(d.slot_mutex);
+        --d.slots_used;
+        d.slot_cv.notify_one();
+      }
+    } slot_guard{*this};
+
+    rpc::RequestHeader header;
+    header.schema_version = options.schema_version;
+    header.client_id = client_id;
+    header.correlation_id = next_correlation.fetch_add(1);
+    header.deadline_budget_ns = static_cast<std::uint64_t>(timeout.count());
+    header.server_instance_id = options.server_instance_id;
+
+    void* chunk = nullptr;
+    loans.acquire();
+    struct LoanGuard {  // gives the loan slot back once the request is sent (or given up)
+      Impl& d;
+      bool held = true;
+      void release() {
+        if (held) d.loans.release();
+        held = false;
+      }
+      ~LoanGuard() { release(); }
+    } loan_guard{*this};
+    {
+      std::lock_guard lock(port_mutex);
+      if (port->getConnectionState() != iox::ConnectionState::CONNECTED) return noServer();
+      auto loaned = port->loan(static_cast<std::uint32_t>(size), shm::kChunkAlignment);
+      if (loaned.has_error())
+        return {StatusCode::ResourceExhausted, "could not loan a " + std::to_string(size) + "-byte shared-memory chunk: " +
+                                                   loanError(loaned.get_error()) + "; retry later"};
+      chunk = loaned.value();
+    }
+    shm::writeRequestHeader(chunk, header, method, body_size);
+    fill(shm::bodyOf(chunk));
+    iox::popo::RequestHeader::fromPayload(chunk)->setSequenceId(static_cast<std::int64_t>(header.correlation_id));
+
+    Pending waiting;
+    {
+      std::lock_guard lock(pending_mutex);
+      pending.emplace(header.correlation_id, &waiting);
+    }
+    auto forget = [&] {
+      std::lock_guard lock(pending_mutex);
+      pending.erase(header.correlation_id);
+    };
+    bool sent;
+    {
+      std::lock_guard lock(port_mutex);
+      sent = !port->send(chunk).has_error();  // on error iceoryx releases the chunk
+    }
+    loan_guard.release();
+    if (!sent) {
+      forget();
+      return noServer();
+    }
+    // Replies usually come within microseconds: poll the port here briefly before
+    // sleeping on the condition variable (saves the receive thread's wake-up and ours).
+    for (const auto spin_until = Clock::now() + kSpin; !waiting.done.load() && Clock::now() < spin_until;)
+      if (!pollOnce()) std::this_thread::yield();
+    {
+      std::unique_lock lock(pending_mutex);
+      pending_cv.wait_until(lock, deadline, [&] { return waiting.done.load(); });
+      pending.erase(header.correlation_id);
+      if (!waiting.done)
+        return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply from the robodiff server within " +
+                                                  milliseconds(timeout)};
+    }
+    if (waiting.response == nullptr) return waiting.failure;
+
+    const void* response = waiting.response;
+    const auto response_size = iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize();
+    shm::ReplyView view;
+    Status result = shm::parseReply(response, response_size, view);
+    if (!result.ok()) {
+      result = {StatusCode::Internal, "the server's reply is unreadable: " + result.message};
+    } else if (!view.header.status.ok()) {
+      result = std::move(view.header.status);  // (a refused malformed request may lack our ids)
+    } else if (view.header.correlation_id != header.correlation_id || view.header.client_id != client_id ||
+               view.method != method) {
+      result = {StatusCode::Internal, "the server's reply does not match the request (correlation id, client id or method)"};
+    } else {
+      result = on_reply(view);
+    }
+    releaseResponse(response);
+    return result;
+  }
+
+  template <class Request, class Reply>
+  Status compact(rpc::Method method, const Request& request, Reply& reply, CallOptions call_options) {
+    const std::vector<std::byte> body = shm::encode(request);
+    return call(
+        method, body.size(), call_options, [&](std::byte* out) { std::memcpy(out, body.data(), body.size()); },
+        [&](const shm::ReplyView& view) {
+          Status s = shm::decode(view.body, reply);
+          if (!s.ok()) s = {StatusCode::Internal, "the server's reply is unreadable: " + s.message};
+          return s;
+        });
+  }
+
+  Status evaluate(rpc::Method method, std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
+                  std::span<double> outputs, CallOptions call_options) {
+    const std::uint64_t body_size = shm::evaluateRequestBodySize(function_id.size(), inputs.size());
+    if (method == rpc::Method::EvaluateBatch) {
+      if (knots > std::numeric_limits<std::uint32_t>::max())
+        return {StatusCode::InvalidArgument, "a batch of " + std::to_string(knots) + " knots does not fit 32 bits"};
+      const std::uint64_t size = shm::chunkSize(0, body_size);
+      if (size > options.max_chunk_payload) {
+        const std::uint64_t per_knot = knots == 0 ? 1 : std::max<std::uint64_t>(inputs.size() / knots, 1);
+        const std::uint64_t fit =
+            (options.max_chunk_payload - shm::chunkSize(0, shm::evaluateRequestBodySize(function_id.size(), 0))) /
+            (per_knot * sizeof(double));
+        return {StatusCode::ResourceExhausted,
+                "a batch of " + std::to_string(knots) + " knots (" + std::to_string(size) +
+                    " bytes) exceeds the iceoryx transport's limit of " + std::to_string(options.max_chunk_payload) +
+                    " bytes (the largest shared-memory pool); nothing was sent: split it into batches of at most " +
+                    std::to_string(fit) + " knots"};
+      }
+    }
+    return call(
+        method, body_size, call_options,
+        [&](std::byte* body) {
+          const std::span<double> in = shm::writeEvaluateRequestBody(body, function_id, knots, inputs.size());
+          std::copy(inputs.begin(), inputs.end(), in.begin());
+        },
+        [&](const shm::ReplyView& view) -> Status {
+          shm::EvaluateReplyView reply;
+          if (Status s = shm::decodeEvaluateReply(view.body, reply); !s.ok())
+            return {StatusCode::Internal, "the server's reply is unreadable: " + s.message};
+          if (reply.fixed.chunk_count != 1 || reply.fixed.first_knot != 0)
+            return {StatusCode::Internal, "split batch replies are not used over iceoryx (got chunk " +
+                                              std::to_string(reply.fixed.chunk_index) + " of " +
+                                              std::to_string(reply.fixed.chunk_count) + ")"};
+          if (reply.outputs.size() > outputs.size())
+            return {StatusCode::Internal, "the reply has " + std::to_string(reply.outputs.size()) +
+                                              " outputs but the caller's buffer holds " + std::to_string(outputs.size())};
+          std::copy(reply.outputs.begin(), reply.outputs.end(), outputs.begin());
+          return {};
+        });
+  }
+
+  ~Impl() {
+    if (running.exchange(false)) {
+      waitset->markForDestruction();
+      if (receiver.joinable()) receiver.join();
+    }
+    failAll({StatusCode::Cancelled, "the connection is closing"});
+    waitset.reset();
+    port.reset();
+  }
+};
+
+ShmConnection::ShmConnection(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ShmConnection::~ShmConnection() = default;
+
+Status ShmConnection::loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::LoadModel, request, reply, options);
+}
+Status ShmConnection::getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
+                                  CallOptions options) {
+  return impl_->compact(rpc::Method::GetFunction, request, reply, options);
+}
+Status ShmConnection::listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
+                                    CallOptions options) {
+  return impl_->compact(rpc::Method::ListFunctions, request, reply, options);
+}
+Status ShmConnection::health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::Health, request, reply, options);
+}
+Status ShmConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::Release, request, reply, options);
+}
+Status ShmConnection::evaluate(std::string_view function_id, std::span<const double> inputs, std::span<double> outputs,
+                               CallOptions options) {
+  return impl_->evaluate(rpc::Method::Evaluate, function_id, 1, inputs, outputs, options);
+}
+Status ShmConnection::evaluateBatch(std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
+                                    std::span<double> outputs, CallOptions options) {
+  return impl_->evaluate(rpc::Method::EvaluateBatch, function_id, knots, inputs, outputs, options);
+}
+bool ShmConnection::serverConnected() const { return impl_->connected(); }
+const std::string& ShmConnection::clientId() const { return impl_->client_id; }
+
+std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options, Status& status) {
+  auto impl = std::make_unique<ShmConnection::Impl>();
+  impl->options = options;
+  impl->options.max_in_flight = std::clamp<std::uint32_t>(options.max_in_flight, 1, iox::MAX_RESPONSE_QUEUE_CAPACITY);
+  impl->client_id = options.client_id;
+  if (impl->client_id.empty()) {
+    impl->client_id = defaultClientId();  // "<host>:<pid>:<random>": keep the unique end
+    if (impl->client_id.size() >= shm::kIdCapacity)
+      impl->client_id = impl->client_id.substr(impl->client_id.size() - (shm::kIdCapacity - 1));
+  }
+  status = shm::checkId("client id", impl->client_id);
+  if (status.ok()) status = shm::checkId("server instance id", options.server_instance_id);
+  if (!status.ok()) return nullptr;
+  if (options.service.empty() || options.service.size() > iox::capro::IdString_t::capacity()) {
+    status = {StatusCode::InvalidArgument, "iceoryx service name '" + options.service + "' must have 1 to " +
+                                               std::to_string(iox::capro::IdString_t::capacity()) + " characters"};
+    return nullptr;
+  }
+  status = shm::ensureRuntime("robodiff-client");
+  if (!status.ok()) return nullptr;
+
+  iox::popo::ClientOptions client_options;
+  client_options.responseQueueCapacity = iox::MAX_RESPONSE_QUEUE_CAPACITY;
+  const iox::capro::ServiceDescription description(
+      "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, options.service.c_str()), "rpc");
+  impl->port = std::make_unique<iox::popo::UntypedClient>(description, client_options);
+  impl->waitset = std::make_unique<iox::popo::WaitSet<>>();
+  if (impl->waitset->attachState(*impl->port, iox::popo::ClientState::HAS_RESPONSE).has_error()) {
+    status = {StatusCode::Internal, "could not attach the iceoryx client to a WaitSet"};
+    return nullptr;
+  }
+  const auto until = Clock::now() + options.connect_timeout;
+  while (!impl->connected() && Clock::now() < until) std::this_thread::sleep_for(1ms);
+  if (!impl->connected() && options.require_server) {
+    status = impl->noServer();
+    status.message += "; waited " + milliseconds(options.connect_timeout);
+    return nullptr;
+  }
+  impl->running = true;
+  auto* d = impl.get();
+  impl->receiver = std::thread([d] { d->receiveLoop(); });
+  status = {};
+  return std::make_unique<ShmConnection>(std::move(impl));
+}
+
+ShmConnectError::ShmConnectError(Status status)
+    : std::runtime_error("iceoryx connection failed: " + toString(status.code) + ": " + status.message),
+      status_(std::move(status)) {}
+
+std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options) {
+  Status status;
+  auto connection = connectShm(options, status);
+  if (!connection) throw ShmConnectError(status);
+  return connection;
+}
+
+}  // namespace robodiff::client

@@ -1,0 +1,327 @@
+// The iceoryx chunk layout and codec, without iceoryx: every message round trips, every
+// malformed chunk is INVALID_ARGUMENT, deploy/roudi.toml matches the compiled-in pools.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "robodiff/schema/shm_codec.hpp"
+#include "robodiff/schema/shm_mempools.hpp"
+#include "support/test_paths.hpp"
+
+namespace robodiff::shm {
+namespace {
+
+// A chunk in 8-byte aligned storage, as iceoryx gives.
+struct Chunk {
+  explicit Chunk(std::size_t size) : words((size + 7) / 8 + 1), size(size) {}
+  void* data() { return words.data(); }
+  std::vector<std::uint64_t> words;
+  std::size_t size;
+};
+
+template <class M>
+M roundTrip(const M& message) {
+  const auto bytes = encode(message);
+  M out;
+  const Status s = decode(bytes, out);
+  EXPECT_TRUE(s.ok()) << s.message;
+  // Every prefix is cut off: INVALID_ARGUMENT, never a crash.
+  for (std::size_t cut = 0; cut < bytes.size(); ++cut) {
+    M partial;
+    EXPECT_EQ(decode(std::span(bytes.data(), cut), partial).code, StatusCode::InvalidArgument) << "cut at " << cut;
+  }
+  auto longer = bytes;
+  longer.push_back(std::byte{0});
+  M extra;
+  EXPECT_EQ(decode(longer, extra).code, StatusCode::InvalidArgument);
+  return out;
+}
+
+TEST(ShmCodec, LoadModel) {
+  rpc::LoadModelRequest req{"<robot name='r'/>", true, R"({"gravity":[0,0,-9.81]})"};
+  auto r = roundTrip(req);
+  EXPECT_EQ(r.urdf, req.urdf);
+  EXPECT_TRUE(r.floating_base);
+  EXPECT_EQ(r.options_json, req.options_json);
+
+  rpc::LoadModelReply rep{"abc123", {"j1", "j2"}, {"f1", "", "f3"}, 7, 6};
+  auto p = roundTrip(rep);
+  EXPECT_EQ(p.model_id, rep.model_id);
+  EXPECT_EQ(p.joint_names, rep.joint_names);
+  EXPECT_EQ(p.frame_names, rep.frame_names);
+  EXPECT_EQ(p.nq, 7u);
+  EXPECT_EQ(p.nv, 6u);
+}
+
+TEST(ShmCodec, GetFunction) {
+  rpc::GetFunctionRequest req{"model", "{\"function\":\"rnea\"}", true};
+  auto r = roundTrip(req);
+  EXPECT_EQ(r.model_id, "model");
+  EXPECT_EQ(r.spec_json, req.spec_json);
+  EXPECT_TRUE(r.wait);
+
+  rpc::GetFunctionReply rep;
+  rep.function_id = "fn";
+  rep.state = rpc::FunctionState::Failed;
+  rep.inputs = {{"q", 7}, {"v", 7}};
+  rep.outputs = {{"value", rpc::OutputKind::Value, 7, 1, rpc::OutputLayout::DenseRowMajor, 7, {}, {}},
+                 {"jac", rpc::OutputKind::Hessian, 2, 3, rpc::OutputLayout::SparseCsr, 3, {0, 2, 3}, {0, 2, 1}}};
+  auto p = roundTrip(rep);
+  EXPECT_EQ(p.function_id, "fn");
+  EXPECT_EQ(p.state, rpc::FunctionState::Failed);
+  ASSERT_EQ(p.inputs.size(), 2u);
+  EXPECT_EQ(p.inputs[1].name, "v");
+  EXPECT_EQ(p.inputs[1].size, 7u);
+  ASSERT_EQ(p.outputs.size(), 2u);
+  EXPECT_EQ(p.outputs[1].name, "jac");
+  EXPECT_EQ(p.outputs[1].kind, rpc::OutputKind::Hessian);
+  EXPECT_EQ(p.outputs[1].rows, 2u);
+  EXPECT_EQ(p.outputs[1].cols, 3u);
+  EXPECT_EQ(p.outputs[1].layout, rpc::OutputLayout::SparseCsr);
+  EXPECT_EQ(p.outputs[1].nnz, 3u);
+  EXPECT_EQ(p.outputs[1].row_offsets, (std::vector<std::uint32_t>{0, 2, 3}));
+  EXPECT_EQ(p.outputs[1].col_indices, (std::vector<std::uint32_t>{0, 2, 1}));
+}
+
+TEST(ShmCodec, ListFunctionsReleaseHealthRequests) {
+  EXPECT_EQ(roundTrip(rpc::ListFunctionsRequest{"m"}).model_id, "m");
+  EXPECT_EQ(roundTrip(rpc::ReleaseRequest{"id-1"}).id, "id-1");
+  EXPECT_TRUE(roundTrip(rpc::HealthRequest{true}).verbose);
+  EXPECT_EQ(roundTrip(rpc::ReleaseReply{5}).references_left, 5u);
+
+  rpc::ListFunctionsReply rep;
+  rep.functions = {{"f1", "m1", "rnea", rpc::FunctionState::Ready, true, 1ull << 40, ""},
+                   {"f2", "m1", "aba", rpc::FunctionState::Failed, false, 0, "why"}};
+  auto p = roundTrip(rep);
+  ASSERT_EQ(p.functions.size(), 2u);
+  EXPECT_EQ(p.functions[0].evaluations, 1ull << 40);
+  EXPECT_TRUE(p.functions[0].compiled);
+  EXPECT_EQ(p.functions[1].function_name, "aba");
+  EXPECT_EQ(p.functions[1].state, rpc::FunctionState::Failed);
+  EXPECT_EQ(p.functions[1].message, "why");
+  EXPECT_EQ(p.functions[1].model_id, "m1");
+}
+
+TEST(ShmCodec, HealthReplyEveryField) {
+  rpc::HealthReply h;
+  h.state = rpc::ServingState::Draining;
+  h.version = "1.2.3";
+  h.server_instance_id = "srv";
+  h.uptime_ns = 1;
+  h.models_loaded = 2;
+  h.functions_loaded = 3;
+  h.functions_compiled = 4;
+  h.builds_queued = 5;
+  h.builds_running = 6;
+  h.builds_failed = 7;
+  h.builds_done = 8;
+  h.cache_hits = 9;
+  h.cache_misses = 10;
+  h.cache_bytes = 11;
+  h.cache_entries = 12;
+  h.workers_total = 13;
+  h.workers_busy = 14;
+  h.queue_depth = 15;
+  h.queue_capacity = 16;
+  h.batch_threads = 17;
+  h.methods = {{rpc::Method::Release, 18, 19, 20, 21, 22, 23}};
+  h.errors = {{StatusCode::Unauthenticated, 24}};
+  h.transports = {{"iceoryx", 25, 26}, {"dds", 27, 28}};
+  auto p = roundTrip(h);
+  EXPECT_EQ(p.state, rpc::ServingState::Draining);
+  EXPECT_EQ(p.version, "1.2.3");
+  EXPECT_EQ(p.server_instance_id, "srv");
+  const std::vector<std::uint64_t> got{p.uptime_ns, p.models_loaded, p.functions_loaded, p.functions_compiled,
+                                       p.builds_queued, p.builds_running, p.builds_failed, p.builds_done,
+                                       p.cache_hits, p.cache_misses, p.cache_bytes, p.cache_entries,
+                                       p.workers_total, p.workers_busy, p.queue_depth, p.queue_capacity,
+                                       p.batch_threads};
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i], i + 1);
+  ASSERT_EQ(p.methods.size(), 1u);
+  EXPECT_EQ(p.methods[0].method, rpc::Method::Release);
+  EXPECT_EQ(p.methods[0].requests, 18u);
+  EXPECT_EQ(p.methods[0].max_ns, 23u);
+  ASSERT_EQ(p.errors.size(), 1u);
+  EXPECT_EQ(p.errors[0].code, StatusCode::Unauthenticated);
+  EXPECT_EQ(p.errors[0].count, 24u);
+  ASSERT_EQ(p.transports.size(), 2u);
+  EXPECT_EQ(p.transports[1].transport, "dds");
+  EXPECT_EQ(p.transports[1].errors, 28u);
+}
+
+TEST(ShmCodec, EvaluateMessages) {
+  rpc::EvaluateRequest e{"fn-id", {1.5, -2, 3}};
+  auto r = roundTrip(e);
+  EXPECT_EQ(r.function_id, "fn-id");
+  EXPECT_EQ(r.inputs, e.inputs);
+
+  rpc::EvaluateBatchRequest b{"f", 2, {1, 2, 3, 4, 5, 6}};
+  auto rb = roundTrip(b);
+  EXPECT_EQ(rb.knot_count, 2u);
+  EXPECT_EQ(rb.inputs, b.inputs);
+
+  EXPECT_EQ(roundTrip(rpc::EvaluateReply{{4, 5}}).outputs, (std::vector<double>{4, 5}));
+  rpc::EvaluateBatchReply br{1, 3, 10, 4, 2, {1, 2, 3, 4}};
+  auto p = roundTrip(br);
+  EXPECT_EQ(p.chunk_index, 1u);
+  EXPECT_EQ(p.chunk_count, 3u);
+  EXPECT_EQ(p.total_knots, 10u);
+  EXPECT_EQ(p.first_knot, 4u);
+  EXPECT_EQ(p.knot_count, 2u);
+  EXPECT_EQ(p.outputs, br.outputs);
+}
+
+TEST(ShmCodec, BadEnumsAndCountsAreInvalid) {
+  auto bytes = encode(rpc::HealthReply{});
+  std::uint32_t state = 7;
+  std::memcpy(bytes.data(), &state, 4);
+  rpc::HealthReply h;
+  const Status s = decode(bytes, h);
+  EXPECT_EQ(s.code, StatusCode::InvalidArgument);
+  EXPECT_NE(s.message.find("state"), std::string::npos) << s.message;
+
+  // A string claiming 4 GB.
+  auto release = encode(rpc::ReleaseRequest{"abc"});
+  std::uint32_t huge = 0xFFFFFFFF;
+  std::memcpy(release.data(), &huge, 4);
+  rpc::ReleaseRequest r;
+  EXPECT_EQ(decode(release, r).code, StatusCode::InvalidArgument);
+
+  // A boolean that is 2.
+  auto health = encode(rpc::HealthRequest{true});
+  health[0] = std::byte{2};
+  rpc::HealthRequest hr;
+  EXPECT_EQ(decode(health, hr).code, StatusCode::InvalidArgument);
+}
+
+TEST(ShmCodec, RequestChunkRoundTripAndMalformedHeaders) {
+  rpc::RequestHeader header;
+  header.client_id = "host:42:deadbeef";
+  header.correlation_id = 99;
+  header.deadline_budget_ns = 5'000'000;
+  header.server_instance_id = "srv-1";
+  header.schema_version = {1, 3};
+  const double inputs[] = {1, 2, 3};
+  const std::size_t body = evaluateRequestBodySize(3, 3);
+  Chunk chunk(chunkSize(0, body));
+  writeRequestHeader(chunk.data(), header, rpc::Method::Evaluate, body);
+  auto in = writeEvaluateRequestBody(bodyOf(chunk.data()), "abc", 1, 3);
+  std::copy(std::begin(inputs), std::end(inputs), in.begin());
+
+  RequestView view;
+  ASSERT_TRUE(parseRequest(chunk.data(), chunk.size, view).ok());
+  EXPECT_EQ(view.method, rpc::Method::Evaluate);
+  EXPECT_EQ(view.header.client_id, header.client_id);
+  EXPECT_EQ(view.header.correlation_id, 99u);
+  EXPECT_EQ(view.header.deadline_budget_ns, 5'000'000u);
+  EXPECT_EQ(view.header.server_instance_id, "srv-1");
+  EXPECT_EQ(view.header.schema_version.minor, 3);
+  EvaluateRequestView ev;
+  ASSERT_TRUE(decodeEvaluateRequest(view.body, ev).ok());
+  EXPECT_EQ(ev.function_id, "abc");
+  EXPECT_EQ(ev.knots, 1u);
+  ASSERT_EQ(ev.inputs.size(), 3u);
+  EXPECT_EQ(ev.inputs[2], 3.0);
+  // The doubles are read in place: they lie inside the chunk.
+  EXPECT_GE(reinterpret_cast<const void*>(ev.inputs.data()), chunk.data());
+
+  // Truncated anywhere: INVALID_ARGUMENT.
+  for (std::size_t cut = 0; cut < chunk.size; ++cut) {
+    RequestView v;
+    EvaluateRequestView e;
+    Status s = parseRequest(chunk.data(), cut, v);
+    if (s.ok()) s = decodeEvaluateRequest(v.body, e);
+    EXPECT_EQ(s.code, StatusCode::InvalidArgument) << "cut at " << cut;
+  }
+  auto corrupt = [&](auto mutate) {
+    Chunk copy = chunk;
+    ChunkHeader h;
+    std::memcpy(&h, copy.data(), sizeof h);
+    mutate(h);
+    std::memcpy(copy.data(), &h, sizeof h);
+    RequestView v;
+    EvaluateRequestView e;
+    Status s = parseRequest(copy.data(), copy.size, v);
+    if (s.ok()) s = decodeEvaluateRequest(v.body, e);
+    return s;
+  };
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.magic = 0; }).code, StatusCode::InvalidArgument);
+  const Status unknown = corrupt([](ChunkHeader& h) { h.method = 77; });
+  EXPECT_EQ(unknown.code, StatusCode::InvalidArgument);
+  EXPECT_NE(unknown.message.find("unknown method 77"), std::string::npos) << unknown.message;
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.kind = 2; }).code, StatusCode::InvalidArgument);
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.body_length += 8; }).code, StatusCode::InvalidArgument);
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.body_length = ~0ull; }).code, StatusCode::InvalidArgument);
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.status_message_length = 0xFFFFFFF0u; }).code, StatusCode::InvalidArgument);
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { std::memset(h.client_id, 'x', sizeof h.client_id); }).code,
+            StatusCode::InvalidArgument);
+  EXPECT_EQ(corrupt([](ChunkHeader& h) { h.body_length -= 8; }).code, StatusCode::InvalidArgument);
+
+  // Evaluate body lengths that lie.
+  Chunk bad = chunk;
+  EvaluateRequestFixed fixed;
+  std::byte* b = bodyOf(bad.data());
+  std::memcpy(&fixed, b, sizeof fixed);
+  fixed.value_count = 1ull << 60;
+  std::memcpy(b, &fixed, sizeof fixed);
+  RequestView v;
+  ASSERT_TRUE(parseRequest(bad.data(), bad.size, v).ok());
+  EvaluateRequestView e;
+  EXPECT_EQ(decodeEvaluateRequest(v.body, e).code, StatusCode::InvalidArgument);
+  fixed.value_count = 3;
+  fixed.function_id_length = 1000;
+  std::memcpy(b, &fixed, sizeof fixed);
+  EXPECT_EQ(decodeEvaluateRequest(v.body, e).code, StatusCode::InvalidArgument);
+}
+
+TEST(ShmCodec, ReplyChunkCarriesStatusAndBody) {
+  rpc::ReplyHeader header;
+  header.client_id = "c";
+  header.server_instance_id = "s";
+  header.correlation_id = 7;
+  header.status = {StatusCode::NotFound, "no function 'x' (of 13 chars)"};
+  const auto body = encode(rpc::ReleaseReply{3});
+  Chunk chunk(chunkSize(wireMessage(header.status).size(), body.size()));
+  writeReplyHeader(chunk.data(), header, rpc::Method::Release, body.size());
+  std::memcpy(bodyOf(chunk.data()), body.data(), body.size());
+  ReplyView view;
+  ASSERT_TRUE(parseReply(chunk.data(), chunk.size, view).ok());
+  EXPECT_EQ(view.method, rpc::Method::Release);
+  EXPECT_EQ(view.header.status.code, StatusCode::NotFound);
+  EXPECT_EQ(view.header.status.message, header.status.message);
+  EXPECT_EQ(view.header.correlation_id, 7u);
+  rpc::ReleaseReply r;
+  ASSERT_TRUE(decode(view.body, r).ok());
+  EXPECT_EQ(r.references_left, 3u);
+  // A request parser refuses a reply chunk.
+  RequestView request;
+  EXPECT_EQ(parseRequest(chunk.data(), chunk.size, request).code, StatusCode::InvalidArgument);
+  // Ids that do not fit are refused before writing.
+  EXPECT_EQ(checkId("client id", std::string(64, 'a')).code, StatusCode::InvalidArgument);
+  EXPECT_TRUE(checkId("client id", std::string(63, 'a')).ok());
+}
+
+TEST(ShmMempools, DeployRoudiTomlMatchesTheCompiledTable) {
+  std::ifstream in(testing::sourceDir() / "deploy" / "roudi.toml");
+  ASSERT_TRUE(in) << "deploy/roudi.toml missing";
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string s = text.str();
+  const std::regex pool(R"(\[\[segment\.mempool\]\]\s*size\s*=\s*(\d+)\s*count\s*=\s*(\d+))");
+  std::vector<Mempool> found;
+  for (auto it = std::sregex_iterator(s.begin(), s.end(), pool); it != std::sregex_iterator(); ++it)
+    found.push_back({static_cast<std::uint32_t>(std::stoul((*it)[1])), static_cast<std::uint32_t>(std::stoul((*it)[2]))});
+  ASSERT_EQ(found.size(), kMempools.size());
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    EXPECT_EQ(found[i].size, kMempools[i].size) << "pool " << i;
+    EXPECT_EQ(found[i].count, kMempools[i].count) << "pool " << i;
+  }
+  // The largest batch the server accepts fits: 1000 knots x 3000 outputs.
+  EXPECT_GE(maxChunkPayload(), chunkSize(0, evaluateReplyBodySize(1000ull * 3000)));
+}
+
+}  // namespace
+}  // namespace robodiff::shm
