@@ -1,0 +1,310 @@
+// DdsConnection: sending requests, matching, and the receive thread that routes replies.
+#include "robodiff/client/dds_connection.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "pending_calls.hpp"
+#include "robodiff/schema/dds_batch_chunks.hpp"
+#include "robodiff/schema/dds_codec.hpp"
+
+namespace robodiff::client {
+
+using dds_detail::PendingCall;
+using dds_detail::PendingCalls;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// "2 s", "0.3 s", "150 ms".
+std::string seconds(Clock::duration d) {
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(d).count();
+  char text[64];
+  if (ms < 1000) std::snprintf(text, sizeof text, "%lld ms", static_cast<long long>(ms));
+  else if (ms % 1000 == 0) std::snprintf(text, sizeof text, "%lld s", static_cast<long long>(ms / 1000));
+  else std::snprintf(text, sizeof text, "%.1f s", double(ms) / 1000.0);
+  return text;
+}
+
+}  // namespace
+
+DdsConnection::DdsConnection(DdsConnectionOptions options)
+    : options_(std::move(options)), pending_(std::make_unique<PendingCalls>()) {
+  client_id_ = options_.connection.client_id.empty() ? defaultClientId() : options_.connection.client_id;
+  endpoints_ = std::make_unique<dds_codec::DdsEndpoints>(options_.domain_id, options_.service_name,
+                                                         dds_codec::DdsEndpoints::Side::Client,
+                                                         std::chrono::seconds(1), options_.lease);
+  guard_ = dds_create_guardcondition(endpoints_->participant());
+  if (guard_ < 0) throw std::runtime_error(dds_codec::ddsError("dds_create_guardcondition", guard_));
+  // The status conditions that report a server (dis)appearing.
+  dds_set_status_mask(endpoints_->writer(), DDS_PUBLICATION_MATCHED_STATUS);
+  dds_set_status_mask(endpoints_->reader(), DDS_SUBSCRIPTION_MATCHED_STATUS);
+  receiver_ = std::thread([this] { receiveLoop(); });
+}
+
+DdsConnection::~DdsConnection() {
+  stopping_ = true;
+  dds_set_guardcondition(guard_, true);
+  if (receiver_.joinable()) receiver_.join();
+  pending_->close(StatusCode::Cancelled, "the DDS connection was closed");
+  endpoints_.reset();
+}
+
+std::uint32_t DdsConnection::domainId() const { return endpoints_->domainId(); }
+
+bool DdsConnection::connected() const {
+  std::lock_guard lock(match_mutex_);
+  return matched_;
+}
+
+// ---- the receive thread ------------------------------------------------------------------
+
+void DdsConnection::receiveLoop() {
+  const dds_entity_t participant = endpoints_->participant(), reader = endpoints_->reader();
+  const dds_entity_t waitset = dds_create_waitset(participant);
+  const dds_entity_t readable = dds_create_readcondition(reader, DDS_ANY_STATE);
+  dds_waitset_attach(waitset, readable, 0);
+  dds_waitset_attach(waitset, guard_, 0);
+  dds_waitset_attach(waitset, endpoints_->writer(), 0);  // publication matched
+  dds_waitset_attach(waitset, reader, 0);                // subscription matched
+  updateMatched();
+  while (!stopping_) {
+    dds_waitset_wait(waitset, nullptr, 0, DDS_INFINITY);
+    takeReplies();    // first: replies a server wrote just before it went away still count
+    updateMatched();
+  }
+  dds_delete(readable);
+  dds_delete(waitset);
+}
+
+void DdsConnection::takeReplies() {
+  constexpr int kBatch = 16;
+  void* samples[kBatch];
+  dds_sample_info_t infos[kBatch];
+  for (;;) {
+    std::fill(std::begin(samples), std::end(samples), nullptr);  // null: loan from the reader
+    const dds_return_t n = dds_take(endpoints_->reader(), samples, infos, kBatch, kBatch);
+    if (n <= 0) return;
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[i].valid_data) continue;
+      const auto& reply = *static_cast<const robodiff_wire_Reply*>(samples[i]);
+      // Every client reads every reply on the topic: keep ours.
+      if (reply.header.client_id && client_id_ == reply.header.client_id) pending_->deliver(reply);
+    }
+    dds_return_loan(endpoints_->reader(), samples, n);
+  }
+}
+
+void DdsConnection::updateMatched() {
+  dds_publication_matched_status_t publication{};
+  dds_subscription_matched_status_t subscription{};
+  dds_get_publication_matched_status(endpoints_->writer(), &publication);  // also resets the trigger
+  dds_get_subscription_matched_status(endpoints_->reader(), &subscription);
+  const bool now = publication.current_count > 0 && subscription.current_count > 0;
+  std::lock_guard lock(match_mutex_);
+  if (now == matched_) return;
+  // The pending-call table changes state together with matched_, so that a caller who sees
+  // matched_ can register (and one who cannot register waits for matched_).
+  if (now) {
+    pending_->open();
+    matched_since_ = Clock::now();
+  } else {
+    pending_->close(StatusCode::Unavailable,
+                    "robodiffd went away on DDS domain " + std::to_string(domainId()) + ", topic " +
+                        endpoints_->writerTopic() + " (it stopped or crashed); retry when it is back");
+  }
+  matched_ = now;
+  match_cv_.notify_all();
+}
+
+bool DdsConnection::waitMatched(Clock::time_point until) {
+  std::unique_lock lock(match_mutex_);
+  return match_cv_.wait_until(lock, until, [&] { return matched_; });
+}
+
+// Our side sees the server; give the server a moment to see us too (its reader must know our
+// writer, its writer our reader) before the first request after a (re)match.
+void DdsConnection::settleAfterMatch() {
+  Clock::time_point since;
+  {
+    std::lock_guard lock(match_mutex_);
+    since = matched_since_;
+  }
+  const auto ready = since + std::chrono::duration_cast<Clock::duration>(options_.settle);
+  if (Clock::now() < ready) std::this_thread::sleep_until(ready);
+}
+
+// ---- calls -----------------------------------------------------------------------------------
+
+Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options) {
+  const auto start = Clock::now();
+  const auto timeout = std::chrono::duration_cast<Clock::duration>(
+      options.timeout.count() > 0 ? options.timeout : options_.connection.default_timeout);
+  const auto deadline = start + timeout;
+
+  PendingCall call;
+  call.method = method;
+  call.consume = std::move(consume);
+  const std::uint64_t id = next_correlation_id_.fetch_add(1);
+  // A server must be matched first, or DDS drops the request.
+  const auto match_limit = std::min(deadline, start + std::chrono::duration_cast<Clock::duration>(options_.match_timeout));
+  while (!pending_->add(id, call)) {
+    if (!waitMatched(match_limit))
+      return {StatusCode::Unavailable, "no robodiffd answered on DDS domain " + std::to_string(domainId()) +
+                                           ", topic " + endpoints_->writerTopic() + ", within " +
+                                           seconds(match_limit - start) + "; is it running?"};
+  }
+
+  settleAfterMatch();
+
+  dds_codec::WireRequest request;
+  rpc::RequestHeader header;
+  header.schema_version = options_.connection.schema_version;
+  header.client_id = client_id_;
+  header.correlation_id = id;
+  header.deadline_budget_ns = static_cast<std::uint64_t>(std::chrono::nanoseconds(timeout).count());
+  header.server_instance_id = options_.connection.server_instance_id;
+  dds_codec::toWire(header, request->header);
+  dds_sequence_double* borrowed = encode(request->body);
+  const dds_return_t rc = dds_write(endpoints_->writer(), &request.get());
+  if (borrowed) dds_codec::detachDoubles(*borrowed);
+  if (rc != DDS_RETCODE_OK) {
+    pending_->remove(id);
+    return {StatusCode::Unavailable, "sending the " + std::string(rpc::toString(method)) + " request: " +
+                                         dds_codec::ddsError("dds_write", rc) + " (topic " +
+                                         endpoints_->writerTopic() + ")"};
+  }
+  if (auto status = pending_->wait(id, call, deadline)) return *status;
+  return {StatusCode::DeadlineExceeded, "no reply to " + std::string(rpc::toString(method)) + " within " +
+                                            seconds(timeout) + " from robodiffd on DDS domain " +
+                                            std::to_string(domainId()) + ", topic " + endpoints_->writerTopic()};
+}
+
+Status DdsConnection::loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::LoadModel,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_LOAD_MODEL;
+        dds_codec::toWire(request, body._u.load_model);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.load_model, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
+                                  CallOptions options) {
+  return call(
+      rpc::Method::GetFunction,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_GET_FUNCTION;
+        dds_codec::toWire(request, body._u.get_function);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.get_function, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
+                                    CallOptions options) {
+  return call(
+      rpc::Method::ListFunctions,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_LIST_FUNCTIONS;
+        dds_codec::toWire(request, body._u.list_functions);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.list_functions, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::Health,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_HEALTH;
+        dds_codec::toWire(request, body._u.health);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.health, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::Release,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_RELEASE;
+        dds_codec::toWire(request, body._u.release);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.release, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::evaluate(std::string_view function_id, std::span<const double> inputs,
+                               std::span<double> outputs, CallOptions options) {
+  return call(
+      rpc::Method::Evaluate,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_EVALUATE;
+        body._u.evaluate.function_id = dds_codec::dupString(function_id);
+        dds_codec::borrowDoubles(body._u.evaluate.inputs, inputs);  // no copy: dds_write serialises it
+        return &body._u.evaluate.inputs;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        const auto values = dds_codec::view(r.body._u.evaluate.outputs);
+        if (values.size() != outputs.size())
+          return Status{StatusCode::Internal, "the Evaluate reply has " + std::to_string(values.size()) +
+                                                  " outputs but the caller's span holds " +
+                                                  std::to_string(outputs.size())};
+        if (!values.empty()) std::memcpy(outputs.data(), values.data(), values.size() * sizeof(double));
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::evaluateBatch(std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
+                                    std::span<double> outputs, CallOptions options) {
+  if (knots > UINT32_MAX)
+    return {StatusCode::InvalidArgument, "EvaluateBatch of " + std::to_string(knots) +
+                                             " knots: the wire format carries at most 4294967295; split the batch"};
+  dds_codec::BatchAssembler assembler(knots, outputs);
+  return call(
+      rpc::Method::EvaluateBatch,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_EVALUATE_BATCH;
+        body._u.evaluate_batch.function_id = dds_codec::dupString(function_id);
+        body._u.evaluate_batch.knot_count = static_cast<std::uint32_t>(knots);
+        dds_codec::borrowDoubles(body._u.evaluate_batch.inputs, inputs);
+        return &body._u.evaluate_batch.inputs;
+      },
+      [&](const robodiff_wire_Reply& r, bool& complete) {
+        Status status = assembler.add(r.body._u.evaluate_batch);
+        complete = assembler.complete();
+        return status;
+      },
+      options);
+}
+
+std::unique_ptr<Connection> connectDds(const DdsConnectionOptions& options) {
+  return std::make_unique<DdsConnection>(options);
+}
+
+}  // namespace robodiff::client

@@ -1,0 +1,67 @@
+// Topic names, QoS and the entities of either side of the DDS transport.
+#include "robodiff/schema/dds_topics.hpp"
+
+#include <stdexcept>
+
+#include "robodiff.h"
+
+namespace robodiff::dds_codec {
+
+std::string requestTopicName(std::string_view service) { return std::string(service) + "_request"; }
+std::string replyTopicName(std::string_view service) { return std::string(service) + "_reply"; }
+
+std::string ddsError(std::string_view call, dds_return_t code) {
+  return std::string(call) + " failed: " + dds_strretcode(code) + " (" + std::to_string(code) + ")";
+}
+
+DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Side side,
+                           std::chrono::milliseconds writer_blocking, std::chrono::milliseconds lease) {
+  const std::string where = [&] {
+    return domain_id == kDefaultDomain ? std::string("the default DDS domain")
+                                       : "DDS domain " + std::to_string(domain_id);
+  }();
+  dds_qos_t* participant_qos = nullptr;
+  if (lease.count() > 0) {
+    participant_qos = dds_create_qos();
+    dds_qset_liveliness(participant_qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(lease.count()));
+  }
+  participant_ = dds_create_participant(domain_id, participant_qos, nullptr);
+  if (participant_qos) dds_delete_qos(participant_qos);
+  if (participant_ < 0)
+    throw std::runtime_error(ddsError("dds_create_participant", participant_) + " on " + where +
+                             " (check CYCLONEDDS_URI)");
+  dds_domainid_t actual = 0;
+  domain_id_ = dds_get_domainid(participant_, &actual) == DDS_RETCODE_OK ? actual : domain_id;
+
+  const std::string request_topic = requestTopicName(service), reply_topic = replyTopicName(service);
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(writer_blocking.count()));
+  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+  std::string failure;
+  const dds_entity_t requests = dds_create_topic(participant_, &robodiff_wire_Request_desc, request_topic.c_str(), qos, nullptr);
+  const dds_entity_t replies = dds_create_topic(participant_, &robodiff_wire_Reply_desc, reply_topic.c_str(), qos, nullptr);
+  if (requests < 0) {
+    failure = ddsError("dds_create_topic", requests) + " for topic " + request_topic;
+  } else if (replies < 0) {
+    failure = ddsError("dds_create_topic", replies) + " for topic " + reply_topic;
+  } else {
+    const bool server = side == Side::Server;
+    reader_topic_ = server ? request_topic : reply_topic;
+    writer_topic_ = server ? reply_topic : request_topic;
+    reader_ = dds_create_reader(participant_, server ? requests : replies, qos, nullptr);
+    writer_ = dds_create_writer(participant_, server ? replies : requests, qos, nullptr);
+    if (reader_ < 0) failure = ddsError("dds_create_reader", reader_) + " for topic " + reader_topic_;
+    else if (writer_ < 0) failure = ddsError("dds_create_writer", writer_) + " for topic " + writer_topic_;
+  }
+  dds_delete_qos(qos);
+  if (!failure.empty()) {
+    dds_delete(participant_);
+    throw std::runtime_error(failure + " on " + where);
+  }
+}
+
+DdsEndpoints::~DdsEndpoints() {
+  if (participant_ > 0) dds_delete(participant_);
+}
+
+}  // namespace robodiff::dds_codec

@@ -1,0 +1,306 @@
+// DdsServer: the receive thread, admission, inline Evaluate and the posted methods.
+#include "robodiff/server/dds_server.hpp"
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "reply_writer.hpp"
+#include "robodiff/schema/dds_codec.hpp"
+
+namespace robodiff::server {
+
+using dds_codec::WireRequest;
+using dds_detail::ReplyWriter;
+using dds_detail::RequestInfo;
+
+struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
+  Core(ServiceApi& s, DdsServerOptions o, Logger& l)
+      : service(s), options(std::move(o)), log(l), replies(s, l, options.max_sample_bytes) {}
+
+  ServiceApi& service;
+  DdsServerOptions options;
+  Logger& log;
+  ReplyWriter replies;
+
+  std::unique_ptr<dds_codec::DdsEndpoints> endpoints;
+  dds_entity_t guard = 0;  // wakes the receive thread on stop()
+  std::thread receiver;
+  std::atomic<bool> stopping{false};
+  std::atomic<bool> accepting{true};
+
+  std::atomic<std::int64_t> waiting{0};  // posted, not yet started
+  std::atomic<std::size_t> in_flight{0};
+  std::mutex idle_mutex;
+  std::condition_variable idle_cv;
+
+  void receiveLoop();
+  void handle(std::shared_ptr<WireRequest> sample, Clock::time_point received);
+  void evaluateInline(const RequestInfo& info, const robodiff_wire_EvaluateRequest& request);
+  void post(std::shared_ptr<WireRequest> sample, RequestInfo info);
+  void runPosted(const robodiff_wire_Request& sample, const RequestInfo& info);
+  void evaluateBatch(const RequestInfo& info, const robodiff_wire_EvaluateBatchRequest& request);
+  void done() {
+    if (in_flight.fetch_sub(1) == 1) {
+      std::lock_guard lock(idle_mutex);
+      idle_cv.notify_all();
+    }
+  }
+};
+
+namespace {
+
+// Marks one request done (in-flight count) when the last copy of a posted task goes away,
+// whether the task ran or the service dropped it.
+struct InFlight {
+  explicit InFlight(std::shared_ptr<DdsServer::Core> c) : core(std::move(c)) {}
+  InFlight(const InFlight&) = delete;
+  InFlight& operator=(const InFlight&) = delete;
+  ~InFlight() { core->done(); }
+  std::shared_ptr<DdsServer::Core> core;
+};
+
+}  // namespace
+
+DdsServer::DdsServer(ServiceApi& service, DdsServerOptions options, Logger& log)
+    : core_(std::make_shared<Core>(service, std::move(options), log)) {}
+
+DdsServer::~DdsServer() { stop(); }
+
+void DdsServer::start() {
+  Core& c = *core_;
+  if (c.endpoints) throw std::logic_error("DdsServer::start() called twice");
+  c.endpoints = std::make_unique<dds_codec::DdsEndpoints>(c.options.domain_id, c.options.service_name,
+                                                          dds_codec::DdsEndpoints::Side::Server,
+                                                          c.options.write_blocking, c.options.lease);
+  c.guard = dds_create_guardcondition(c.endpoints->participant());
+  if (c.guard < 0) {
+    c.endpoints.reset();
+    throw std::runtime_error(dds_codec::ddsError("dds_create_guardcondition", c.guard));
+  }
+  c.replies.setWriter(c.endpoints->writer());
+  c.receiver = std::thread([core = core_] { core->receiveLoop(); });
+  c.log.info("dds_server_started", {{"domain", c.endpoints->domainId()},
+                                    {"request_topic", c.endpoints->readerTopic()},
+                                    {"reply_topic", c.endpoints->writerTopic()},
+                                    {"server_instance_id", c.service.instanceId()}});
+}
+
+void DdsServer::stopAccepting() { core_->accepting = false; }
+
+bool DdsServer::waitIdle(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(core_->idle_mutex);
+  return core_->idle_cv.wait_for(lock, timeout, [&] { return core_->in_flight.load() == 0; });
+}
+
+void DdsServer::stop() {
+  Core& c = *core_;
+  if (c.stopping.exchange(true) || !c.endpoints) return;
+  dds_set_guardcondition(c.guard, true);
+  if (c.receiver.joinable()) c.receiver.join();
+  c.replies.setWriter(0);  // posted tasks still running drop their replies
+  const auto domain = c.endpoints->domainId();
+  c.endpoints.reset();     // deletes the participant: clients see this server go away
+  c.log.info("dds_server_stopped", {{"domain", domain}, {"in_flight", c.in_flight.load()}});
+}
+
+std::size_t DdsServer::inFlight() const { return core_->in_flight.load(); }
+std::uint32_t DdsServer::domainId() const { return core_->endpoints ? core_->endpoints->domainId() : 0; }
+std::string DdsServer::requestTopic() const { return dds_codec::requestTopicName(core_->options.service_name); }
+std::string DdsServer::replyTopic() const { return dds_codec::replyTopicName(core_->options.service_name); }
+
+// ---- the receive thread ------------------------------------------------------------------
+
+void DdsServer::Core::receiveLoop() {
+  const dds_entity_t participant = endpoints->participant(), reader = endpoints->reader();
+  const dds_entity_t waitset = dds_create_waitset(participant);
+  const dds_entity_t readable = dds_create_readcondition(reader, DDS_ANY_STATE);
+  dds_waitset_attach(waitset, readable, 0);
+  dds_waitset_attach(waitset, guard, 0);
+  while (!stopping) {
+    dds_waitset_wait(waitset, nullptr, 0, DDS_INFINITY);
+    while (!stopping) {
+      // Taken into memory we own (not a loan), so that a posted task can keep it.
+      auto sample = std::make_shared<WireRequest>();
+      void* buffer[1] = {&sample->get()};
+      dds_sample_info_t info;
+      if (dds_take(reader, buffer, &info, 1, 1) <= 0) break;
+      if (!info.valid_data) continue;  // a writer went away: nothing to answer
+      handle(std::move(sample), Clock::now());
+    }
+  }
+  dds_delete(readable);
+  dds_delete(waitset);
+}
+
+void DdsServer::Core::handle(std::shared_ptr<WireRequest> sample, Clock::time_point received) {
+  const robodiff_wire_Request& request = sample->get();
+  RequestInfo info;
+  info.header = dds_codec::fromWire(request.header);
+  info.received = received;
+  // Addressed to another server: it answers (several servers may share a domain).
+  if (!info.header.server_instance_id.empty() && info.header.server_instance_id != service.instanceId()) return;
+
+  const auto method = dds_codec::methodFromWire(request.body._d);
+  if (method) info.method = *method;
+  if (info.method == rpc::Method::EvaluateBatch) info.knot_count = request.body._u.evaluate_batch.knot_count;
+  ++in_flight;
+  try {
+    if (!accepting) {
+      if (method)
+        replies.sendError(info, {StatusCode::Unavailable, "robodiffd " + service.instanceId() +
+                                                              " is draining (shutting down): it finishes the "
+                                                              "requests in flight and takes no new ones; retry "
+                                                              "with another server"});
+      done();
+      return;
+    }
+    if (Status admitted = service.admit(info.header); !admitted.ok()) {
+      if (method) replies.sendError(info, admitted);
+      done();
+      return;
+    }
+    if (!method) {
+      // An unknown discriminator (DDS usually drops such samples already: enum validation).
+      log.warn("dds_request_unknown_method", {{"client_id", info.header.client_id},
+                                              {"correlation_id", info.header.correlation_id},
+                                              {"method", static_cast<std::uint64_t>(request.body._d)}});
+      replies.sendUnknownMethod(info, request.body._d);
+      done();
+      return;
+    }
+    if (*method == rpc::Method::Evaluate) {
+      evaluateInline(info, request.body._u.evaluate);
+      done();
+      return;
+    }
+    post(std::move(sample), std::move(info));
+  } catch (const std::exception& e) {
+    log.error("dds_request_failed", {{"method", rpc::toString(info.method)}, {"error", e.what()}});
+    replies.sendError(info, {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
+    done();
+  }
+}
+
+// Evaluate on the receive thread: shape, size the reply, evaluate() straight into it.
+void DdsServer::Core::evaluateInline(const RequestInfo& info, const robodiff_wire_EvaluateRequest& request) {
+  const CallContext ctx = CallContext::from(info.header, "dds", info.received);
+  const std::string_view function_id = request.function_id ? request.function_id : "";
+  FunctionShape shape;
+  if (Status status = service.shape(function_id, shape); !status.ok()) return replies.sendError(info, status);
+  dds_codec::WireReply reply;
+  reply->body._d = robodiff_wire_METHOD_EVALUATE;  // first: the union is freed by its discriminator
+  dds_codec::allocDoubles(reply->body._u.evaluate.outputs, shape.output_count);
+  const Status status = service.evaluate(ctx, function_id, dds_codec::view(request.inputs),
+                                         dds_codec::view(reply->body._u.evaluate.outputs));
+  if (!status.ok()) return replies.sendError(info, status);
+  replies.header(info, status, reply->header);
+  replies.send(info, reply.get(), StatusCode::Ok);
+}
+
+void DdsServer::Core::post(std::shared_ptr<WireRequest> sample, RequestInfo info) {
+  // The task keeps the sample (its strings and doubles are read in place) and the shared
+  // state; the token ends the request's in-flight count whether the task runs or is dropped.
+  auto token = std::make_shared<InFlight>(shared_from_this());
+  ++waiting;
+  const bool posted = service.post([core = shared_from_this(), sample, info, token] {
+    --core->waiting;
+    core->runPosted(sample->get(), info);
+  });
+  if (!posted) {
+    const std::int64_t queued = --waiting;
+    replies.sendError(info, {StatusCode::ResourceExhausted,
+                             "request queue full (" + std::to_string(std::max<std::int64_t>(queued, 0)) +
+                                 " waiting); retry later"});
+  }
+}
+
+// A posted method, on one of the service's request threads.
+void DdsServer::Core::runPosted(const robodiff_wire_Request& sample, const RequestInfo& info) {
+  try {
+    const CallContext ctx = CallContext::from(info.header, "dds", info.received);
+    if (ctx.expired()) {
+      const auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - info.received);
+      return replies.sendError(info, {StatusCode::DeadlineExceeded,
+                                      std::string(rpc::toString(info.method)) + " waited " +
+                                          std::to_string(waited.count()) +
+                                          " ms in robodiffd's request queue, past its deadline; not started"});
+    }
+    const auto& body = sample.body._u;
+    switch (info.method) {
+      case rpc::Method::LoadModel: {
+        rpc::LoadModelRequest request;
+        dds_codec::fromWire(body.load_model, request);
+        rpc::LoadModelReply reply;
+        Status status = service.loadModel(ctx, request, reply);
+        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+      }
+      case rpc::Method::GetFunction: {
+        rpc::GetFunctionRequest request;
+        dds_codec::fromWire(body.get_function, request);
+        rpc::GetFunctionReply reply;
+        Status status = service.getFunction(ctx, request, reply);
+        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+      }
+      case rpc::Method::ListFunctions: {
+        rpc::ListFunctionsRequest request;
+        dds_codec::fromWire(body.list_functions, request);
+        rpc::ListFunctionsReply reply;
+        Status status = service.listFunctions(ctx, request, reply);
+        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+      }
+      case rpc::Method::Health: {
+        rpc::HealthRequest request;
+        dds_codec::fromWire(body.health, request);
+        rpc::HealthReply reply;
+        Status status = service.health(ctx, request, reply);
+        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+      }
+      case rpc::Method::Release: {
+        rpc::ReleaseRequest request;
+        dds_codec::fromWire(body.release, request);
+        rpc::ReleaseReply reply;
+        Status status = service.release(ctx, request, reply);
+        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+      }
+      case rpc::Method::EvaluateBatch: return evaluateBatch(info, body.evaluate_batch);
+      case rpc::Method::Evaluate: break;  // inline, never posted
+    }
+  } catch (const std::exception& e) {
+    log.error("dds_request_failed", {{"method", rpc::toString(info.method)}, {"error", e.what()}});
+    replies.sendError(info, {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
+  }
+}
+
+// EvaluateBatch: check that the sizes add up, evaluate into one buffer, reply in chunks
+// that borrow slices of it.
+void DdsServer::Core::evaluateBatch(const RequestInfo& info, const robodiff_wire_EvaluateBatchRequest& request) {
+  const CallContext ctx = CallContext::from(info.header, "dds", info.received);
+  const std::string_view function_id = request.function_id ? request.function_id : "";
+  FunctionShape shape;
+  if (Status status = service.shape(function_id, shape); !status.ok()) return replies.sendError(info, status);
+  const std::uint64_t knots = request.knot_count;
+  const std::span<const double> inputs = dds_codec::view(request.inputs);
+  if (knots * shape.input_count != inputs.size())
+    return replies.sendError(
+        info, {StatusCode::InvalidArgument,
+               "EvaluateBatch of " + std::string(function_id) + ": knot_count " + std::to_string(knots) + " x " +
+                   std::to_string(shape.input_count) + " inputs per knot = " +
+                   std::to_string(knots * shape.input_count) + " doubles, but the request carries " +
+                   std::to_string(inputs.size())});
+  if (shape.max_batch_knots != 0 && knots > shape.max_batch_knots)
+    return replies.sendError(info, {StatusCode::ResourceExhausted,
+                                    "EvaluateBatch of " + std::to_string(knots) + " knots: at most " +
+                                        std::to_string(shape.max_batch_knots) +
+                                        " knots per request; split the batch"});
+  const std::size_t count = static_cast<std::size_t>(knots) * shape.output_count;
+  std::unique_ptr<double[]> outputs(new double[count == 0 ? 1 : count]);
+  const Status status = service.evaluateBatch(ctx, function_id, knots, inputs, std::span<double>(outputs.get(), count));
+  if (!status.ok()) return replies.sendError(info, status);
+  replies.sendBatch(info, shape.output_count, std::span<const double>(outputs.get(), count));
+}
+
+}  // namespace robodiff::server

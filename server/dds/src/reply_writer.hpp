@@ -1,0 +1,59 @@
+#pragma once
+// Writing replies on the reply topic: the header every reply carries (server version and
+// instance, the request's client and correlation ids, the status), error replies with the
+// method's empty body, and EvaluateBatch replies split into chunks. Each reply is
+// accounted once with ServiceApi::recordRequest("dds", ...). Safe from any thread.
+
+#include <dds/dds.h>
+
+#include <atomic>
+#include <cstdint>
+#include <span>
+
+#include "robodiff/schema/dds_codec.hpp"
+#include "robodiff/server/log.hpp"
+#include "robodiff/server/service_api.hpp"
+
+namespace robodiff::server::dds_detail {
+
+// What a reply needs to know about its request.
+struct RequestInfo {
+  rpc::RequestHeader header;
+  rpc::Method method = rpc::Method::Health;
+  Clock::time_point received;
+  std::uint32_t knot_count = 0;  // EvaluateBatch: the request's (total_knots of an error reply)
+};
+
+class ReplyWriter {
+ public:
+  ReplyWriter(ServiceApi& service, Logger& log, std::size_t max_sample_bytes)
+      : service_(service), log_(log), max_sample_bytes_(max_sample_bytes) {}
+
+  void setWriter(dds_entity_t writer) { writer_.store(writer); }  // 0: replies are dropped
+
+  // The reply header of `info` with `status`, into a zeroed C header.
+  void header(const RequestInfo& info, const Status& status, robodiff_wire_ReplyHeader& out) const;
+  // Writes a complete reply sample (header and body filled) and accounts for it.
+  void send(const RequestInfo& info, const robodiff_wire_Reply& reply, StatusCode code);
+  // A non-OK reply: the status and the method's empty body (one sample, also for a batch).
+  void sendError(const RequestInfo& info, const Status& status);
+  // An OK reply with a decoded body.
+  void sendBody(const RequestInfo& info, const dds_codec::ReplyBody& body);
+  // An OK EvaluateBatch reply: `outputs` (knot_count knots of per_knot doubles) in chunks of
+  // at most max_sample_bytes, each borrowing its slice of `outputs` (no copy).
+  void sendBatch(const RequestInfo& info, std::uint32_t per_knot, std::span<const double> outputs);
+  // INVALID_ARGUMENT for a body whose discriminator is no known method, echoing it (not
+  // accounted: there is no method to account it under).
+  void sendUnknownMethod(const RequestInfo& info, robodiff_wire_Method discriminator);
+
+ private:
+  bool write(const RequestInfo& info, const robodiff_wire_Reply& reply);
+  void account(const RequestInfo& info, StatusCode code);
+
+  ServiceApi& service_;
+  Logger& log_;
+  std::size_t max_sample_bytes_;
+  std::atomic<dds_entity_t> writer_{0};
+};
+
+}  // namespace robodiff::server::dds_detail
