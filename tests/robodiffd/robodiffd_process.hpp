@@ -47,6 +47,7 @@ class RobodiffdProcess {
     argv_strings.insert(argv_strings.end(), args.begin(), args.end());
     pid_ = fork();
     if (pid_ == 0) {
+      signal(SIGTERM, SIG_DFL);  // the test process may ignore it; robodiffd must not
       const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
       if (fd >= 0) {
         dup2(fd, STDERR_FILENO);

@@ -8,11 +8,13 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -35,6 +37,9 @@ sigset_t blockStopSignals() {
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGHUP);
+  // An ignored signal is dropped even while blocked, so sigwait would never see it: a
+  // parent that ignores SIGTERM (nohup, some supervisors) must not make robodiffd unstoppable.
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) signal(sig, SIG_DFL);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   return set;
 }
@@ -143,12 +148,13 @@ int main(int argc, char** argv) {
       ShmServerOptions options;
       options.service = config.shm.service;
       shm = std::make_unique<ShmServer>(service, options, log);
-      shm->start();
+      if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
+        throw std::runtime_error("iceoryx: " + started_shm.message);
     }
     std::unique_ptr<DdsServer> dds;
     if (config.dds.enabled) {
       DdsServerOptions options;
-      options.domain_id = config.dds.domain;
+      if (config.dds.domain >= 0) options.domain_id = static_cast<std::uint32_t>(config.dds.domain);
       options.service_name = config.dds.service;
       options.max_sample_bytes = config.dds.max_sample_bytes;
       dds = std::make_unique<DdsServer>(service, options, log);
@@ -166,8 +172,17 @@ int main(int argc, char** argv) {
     sigwait(&stop_signals, &sig);
     log.info("draining", {{"signal", signalName(sig)}});
     service.beginDrain();
+    if (shm) shm->stopAccepting();
+    if (dds) dds->stopAccepting();
     const auto drain_timeout = std::chrono::milliseconds(static_cast<long long>(flags.drain_timeout_s * 1000));
-    const bool idle = service.waitIdle(drain_timeout);
+    const auto drain_deadline = std::chrono::steady_clock::now() + drain_timeout;
+    auto left = [&] {
+      return std::chrono::duration_cast<std::chrono::milliseconds>(
+          std::max(drain_deadline - std::chrono::steady_clock::now(), std::chrono::steady_clock::duration::zero()));
+    };
+    bool idle = service.waitIdle(left());
+    if (shm) idle = shm->waitIdle(left()) && idle;
+    if (dds) idle = dds->waitIdle(left()) && idle;
     if (!idle) log.warn("drain_timeout", {{"seconds", flags.drain_timeout_s}});
     if (dds) dds->stop();
     if (shm) shm->stop();

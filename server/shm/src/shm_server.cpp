@@ -15,6 +15,7 @@
 #include "iceoryx_posh/popo/rpc_header.hpp"
 #include "iceoryx_posh/popo/untyped_server.hpp"
 #include "iceoryx_posh/popo/wait_set.hpp"
+#include "iceoryx_posh/runtime/service_discovery.hpp"
 #include "robodiff/schema/shm_codec.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
 
@@ -171,7 +172,11 @@ struct ShmServer::Impl {
       if (!other_server) record(view.method, s.code, received);
       return;
     }
-    if (view.method == rpc::Method::Evaluate || view.method == rpc::Method::EvaluateBatch) {
+    if (view.method == rpc::Method::EvaluateBatch) {
+      postBatch(payload, routing, std::move(view), received);
+      return;
+    }
+    if (view.method == rpc::Method::Evaluate) {
       begin();
       const Status s = evaluate(routing, view, received);
       release(payload);
@@ -302,6 +307,65 @@ struct ShmServer::Impl {
     }
   }
 
+  // EvaluateBatch runs on a request thread (a long batch must not hold up other clients'
+  // Evaluate calls on the receive thread). iceoryx lets a server hold 4 request chunks at
+  // once: up to kHeldBatches batches keep theirs (inputs read in place, no copy); beyond
+  // that a batch's request is copied and its chunk released, so the receive thread can
+  // always take the next request.
+  static constexpr int kHeldBatches = 2;
+  std::atomic<int> held_batches{0};
+
+  void postBatch(const void* payload, const iox::popo::RequestHeader& routing, shm::RequestView view,
+                 Clock::time_point received) {
+    struct Batch {
+      std::shared_ptr<iox::popo::RequestHeader> routing_copy;  // set when the chunk was released
+      std::vector<std::byte> copy;                             // the request, when copied
+      const void* payload = nullptr;                           // the held chunk, otherwise
+      shm::RequestView view;
+    };
+    auto batch = std::make_shared<Batch>();
+    if (held_batches.fetch_add(1) < kHeldBatches) {
+      batch->payload = payload;
+      batch->view = std::move(view);
+    } else {
+      held_batches.fetch_sub(1);
+      const auto* bytes = static_cast<const std::byte*>(payload);
+      batch->copy.assign(bytes, bytes + payloadSize(payload));
+      batch->routing_copy = std::make_shared<iox::popo::RequestHeader>(
+          std::move(const_cast<iox::popo::RequestHeader&>(routing)));
+      const Status parsed = shm::parseRequest(batch->copy.data(), batch->copy.size(), batch->view);
+      release(payload);
+      if (!parsed.ok()) {  // cannot happen: the chunk parsed a moment ago
+        sendReply(*batch->routing_copy, batch->view.header, rpc::Method::EvaluateBatch, parsed, {});
+        record(rpc::Method::EvaluateBatch, parsed.code, received);
+        return;
+      }
+    }
+    auto routingOf = [batch] () -> const iox::popo::RequestHeader& {
+      return batch->routing_copy ? *batch->routing_copy : *iox::popo::RequestHeader::fromPayload(batch->payload);
+    };
+    auto finish = [this, batch] {
+      if (batch->payload != nullptr) {
+        release(batch->payload);
+        held_batches.fetch_sub(1);
+      }
+    };
+    begin();
+    const bool queued = service.post([this, batch, routingOf, finish, received] {
+      const Status s = evaluate(routingOf(), batch->view, received);
+      finish();
+      record(rpc::Method::EvaluateBatch, s.code, received);
+      end();
+    });
+    if (!queued) {
+      Status busy{StatusCode::ResourceExhausted, "the server's request queue is full; EvaluateBatch refused, retry later"};
+      sendReply(routingOf(), batch->view.header, rpc::Method::EvaluateBatch, busy, {});
+      finish();
+      record(rpc::Method::EvaluateBatch, busy.code, received);
+      end();
+    }
+  }
+
   // Runs a posted method on a request thread and sends its reply.
   Status run(Posted& posted) {
     const auto ctx = CallContext::from(posted.header, kTransport, posted.received);
@@ -327,6 +391,30 @@ struct ShmServer::Impl {
   }
 };
 
+namespace {
+
+// Whether some process offers `description` as a server (request/response).
+bool serviceOffered(iox::runtime::ServiceDiscovery& discovery, const iox::capro::ServiceDescription& description) {
+  bool found = false;
+  discovery.findService(description.getServiceIDString(), description.getInstanceIDString(),
+                        description.getEventIDString(), [&](const iox::capro::ServiceDescription&) { found = true; },
+                        iox::popo::MessagingPattern::REQ_RES);
+  return found;
+}
+
+// True once nobody offers `description` (at once when nobody does), false after `wait`.
+bool waitForServiceFree(const iox::capro::ServiceDescription& description, std::chrono::milliseconds wait) {
+  iox::runtime::ServiceDiscovery discovery;
+  const auto until = std::chrono::steady_clock::now() + wait;
+  while (serviceOffered(discovery, description)) {
+    if (std::chrono::steady_clock::now() >= until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
+}
+
+}  // namespace
+
 ShmServer::ShmServer(ServiceApi& service, ShmServerOptions options, Logger& log)
     : impl_(std::make_unique<Impl>(service, std::move(options), log)) {}
 
@@ -344,6 +432,14 @@ Status ShmServer::start() {
       std::clamp<std::uint64_t>(d.options.request_queue_capacity, 1, iox::MAX_REQUEST_QUEUE_CAPACITY);
   const iox::capro::ServiceDescription description(
       "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, d.options.service.c_str()), "rpc");
+  // RouDi allows one server per service and aborts a process asking for a second one.
+  // A server still registered is either alive (another robodiffd) or a crashed one RouDi
+  // has not removed yet (it does within ~1.5 s): wait that long, then refuse clearly.
+  if (!waitForServiceFree(description, d.options.previous_server_wait))
+    return {StatusCode::AlreadyExists,
+            "iceoryx service 'robodiff/" + d.options.service +
+                "/rpc' is already offered on this host (another robodiffd is running, or a crashed one "
+                "has not been cleaned up by RouDi); stop it or choose another name with iceoryx.service"};
   d.port = std::make_unique<iox::popo::UntypedServer>(description, server_options);
   d.waitset = std::make_unique<iox::popo::WaitSet<>>();
   if (d.waitset->attachState(*d.port, iox::popo::ServerState::HAS_REQUEST).has_error()) {

@@ -35,6 +35,10 @@ struct ShmServerOptions {
   // WaitSet (a controller's next call often comes microseconds after its reply; polling
   // saves a wake-up). 0: never poll. Costs up to this much CPU per burst.
   std::chrono::microseconds poll_after_request{50};
+  // RouDi allows one server per service. When one is still registered at start() (a
+  // crashed robodiffd RouDi has not removed yet: it takes ~1.5 s), wait this long for it
+  // to go before refusing with ALREADY_EXISTS.
+  std::chrono::milliseconds previous_server_wait{4000};
 };
 
 class ShmServer {
