@@ -53,7 +53,10 @@ std::string firstLines(const std::string& text, int lines) {
   std::string out;
   std::istringstream in(text);
   std::string line;
-  for (int i = 0; i < lines && std::getline(in, line); ++i) out += (out.empty() ? "" : "\n") + line;
+  for (int i = 0; i < lines && std::getline(in, line); ++i) {
+    if (!out.empty()) out += '\n';
+    out += line;
+  }
   return out;
 }
 
@@ -73,8 +76,11 @@ std::string failureMessage(const JobResult& r) {
     try {
       const BuildOutcome o = buildOutcomeFromJson(r.reply);
       std::string m = o.message.empty() ? std::string("the build failed") : o.message;
-      if (!o.error_kind.empty()) m = o.error_kind + ": " + m;
-      if (!o.compiler_output.empty()) m += "\n" + firstLines(o.compiler_output, 12);
+      if (!o.error_kind.empty()) m.insert(0, o.error_kind + ": ");
+      if (!o.compiler_output.empty()) {
+        m += '\n';
+        m += firstLines(o.compiler_output, 12);
+      }
       return m;
     } catch (const std::exception& e) {
       return std::string("the worker's reply cannot be read: ") + e.what();

@@ -141,7 +141,10 @@ int main(int argc, char** argv) {
   try {
     Service service(config.service, log);
 
-    std::unique_ptr<RoudiHandle> roudi;
+    // A RouDi started here must outlive this process's iceoryx runtime, which unregisters
+    // from it at exit (a static destroyed then): a static made before the runtime is
+    // destroyed after it.
+    static std::unique_ptr<RoudiHandle> roudi;
     std::unique_ptr<ShmServer> shm;
     if (config.shm.enabled) {
       roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
@@ -188,7 +191,6 @@ int main(int argc, char** argv) {
     if (shm) shm->stop();
     dds.reset();
     shm.reset();
-    roudi.reset();
     log.info("stopped", {{"clean", idle}});
     return idle ? 0 : 3;
   } catch (const std::exception& e) {
