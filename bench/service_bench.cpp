@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_daemon.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/client/dds_connection.hpp"
 #include "robodiff/client/shm_connection.hpp"
@@ -36,12 +37,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-std::string readText(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 struct Percentiles {
   double p50 = 0, p99 = 0, max = 0;  // microseconds
@@ -62,37 +57,6 @@ void check(const Status& s, const char* what) {
     std::exit(1);
   }
 }
-
-// robodiffd as a child process, stopped with SIGTERM at the end.
-struct Daemon {
-  pid_t pid = -1;
-  fs::path log;
-  Daemon(const fs::path& exe, const fs::path& cache, int domain, const fs::path& log_path) : log(log_path) {
-    pid = fork();
-    if (pid == 0) {
-      const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-      dup2(fd, STDERR_FILENO);
-      dup2(fd, STDOUT_FILENO);
-      const std::string d = std::to_string(domain);
-      execl(exe.c_str(), exe.c_str(), "--cache", cache.c_str(), "--dds-domain", d.c_str(),
-            static_cast<char*>(nullptr));
-      _exit(127);
-    }
-    for (int i = 0; i < 3000; ++i) {
-      if (readText(log).find("\"event\":\"serving\"") != std::string::npos) return;
-      if (waitpid(pid, nullptr, WNOHANG) == pid) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    std::fprintf(stderr, "service_bench: robodiffd did not start; its log:\n%s\n", readText(log).c_str());
-    kill(pid, SIGTERM);
-    waitpid(pid, nullptr, 0);
-    std::exit(1);
-  }
-  ~Daemon() {
-    kill(pid, SIGTERM);
-    waitpid(pid, nullptr, 0);
-  }
-};
 
 struct Row {
   std::string what;
@@ -139,7 +103,7 @@ int main(int argc, char** argv) {
 
   std::vector<Row> rows;
   {
-    Daemon daemon(ROBODIFFD_PATH, dir / "cache", domain, dir / "robodiffd.log");
+    bench::Daemon daemon(ROBODIFFD_PATH, dir / "cache", domain, dir / "robodiffd.log");
     client::ShmConnectionOptions shm_options;
     auto shm = client::connectShm(shm_options);
     client::DdsConnectionOptions dds_options;
@@ -147,12 +111,12 @@ int main(int argc, char** argv) {
     auto dds = client::connectDds(dds_options);
 
     rpc::LoadModelRequest load;
-    load.urdf = readText(robot);
+    load.urdf = bench::readText(robot);
     rpc::LoadModelReply model;
     check(shm->loadModel(load, model), "LoadModel");
     rpc::GetFunctionRequest get;
     get.model_id = model.model_id;
-    get.spec_json = readText(fs::path(ROBODIFF_SOURCE_DIR) / "examples/specs/rnea_jacobian.json");
+    get.spec_json = bench::readText(fs::path(ROBODIFF_SOURCE_DIR) / "examples/specs/rnea_jacobian.json");
     get.wait = true;
     rpc::GetFunctionReply function;
     check(shm->getFunction(get, function), "GetFunction");

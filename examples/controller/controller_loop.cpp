@@ -3,7 +3,7 @@
 // library is in the shared cache, else the server). Reports how long each evaluation
 // took and how late each tick woke, so the jitter a controller would see is visible.
 //
-//   controller_loop [--urdf FILE] [--seconds S] [--rate HZ] [--server ADDR]
+//   controller_loop [--urdf FILE] [--seconds S] [--rate HZ] [--server ADDR] [--cache DIR]
 // The default robot is the Panda from ../shared when there, else the project's arm7.
 #include <time.h>
 
@@ -60,8 +60,9 @@ int main(int argc, char** argv) {
     else if (a == "--seconds") seconds = std::atof(argv[i + 1]);
     else if (a == "--rate") rate = std::atof(argv[i + 1]);
     else if (a == "--server") options.server = robodiff::client::parseServerAddress(argv[i + 1]);
+    else if (a == "--cache") options.cache_dir = argv[i + 1];
     else {
-      std::fprintf(stderr, "usage: controller_loop [--urdf FILE] [--seconds S] [--rate HZ] [--server ADDR]\n");
+      std::fprintf(stderr, "usage: controller_loop [--urdf FILE] [--seconds S] [--rate HZ] [--server ADDR] [--cache DIR]\n");
       return 2;
     }
   }

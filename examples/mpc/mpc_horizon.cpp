@@ -2,7 +2,7 @@
 // evaluated as one batch (the library's batched entry point in local mode, one
 // EvaluateBatch request otherwise), repeated as a solver would at each iteration.
 //
-//   mpc_horizon [--urdf FILE] [--knots N] [--iterations N] [--server ADDR]
+//   mpc_horizon [--urdf FILE] [--knots N] [--iterations N] [--server ADDR] [--cache DIR]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -27,8 +27,9 @@ int main(int argc, char** argv) {
     else if (a == "--knots") knots = std::atoi(argv[i + 1]);
     else if (a == "--iterations") iterations = std::atoi(argv[i + 1]);
     else if (a == "--server") options.server = robodiff::client::parseServerAddress(argv[i + 1]);
+    else if (a == "--cache") options.cache_dir = argv[i + 1];
     else {
-      std::fprintf(stderr, "usage: mpc_horizon [--urdf FILE] [--knots N] [--iterations N] [--server ADDR]\n");
+      std::fprintf(stderr, "usage: mpc_horizon [--urdf FILE] [--knots N] [--iterations N] [--server ADDR] [--cache DIR]\n");
       return 2;
     }
   }
