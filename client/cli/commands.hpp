@@ -15,4 +15,14 @@ void addBenchCommand(CLI::App& app);     // bench_command.cpp
 void addWarmupCommand(CLI::App& app);    // warmup_command.cpp
 void addCacheCommand(CLI::App& app);     // cache_command.cpp
 
+// Clients of the running server, robodiffd (service_connection.hpp: --server, --timeout,
+// exit statuses 0 OK, 1 the server answered an error, 2 bad usage, 3 no server).
+void addLoadCommand(CLI::App& app);       // load_command.cpp
+void addEvalCommand(CLI::App& app);       // eval_command.cpp
+void addFunctionsCommand(CLI::App& app);  // functions_command.cpp
+void addHealthCommand(CLI::App& app);     // health_command.cpp
+// The subcommand names whose usage errors exit with status 2 (the service commands, and
+// warmup with --server).
+bool isServiceCommandLine(int argc, char** argv);
+
 }  // namespace robodiff::cli

@@ -15,54 +15,29 @@
 #include "output_table.hpp"
 #include "robodiff/dynamics/all.hpp"
 #include "robodiff/functions/model_function.hpp"
+#include "spec_output.hpp"
 #include "state_json.hpp"
 
 namespace robodiff::cli {
 namespace {
 
-nlohmann::json toJson(const Eigen::MatrixXd& m) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    nlohmann::json row = nlohmann::json::array();
-    for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-nlohmann::json toJson(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
-
 nlohmann::json placementJson(const SE3<double>& m) {
   return {{"translation", toJson(Eigen::VectorXd(m.translation))}, {"rotation", toJson(Eigen::MatrixXd(m.rotation))}};
 }
 
-// One label per velocity coordinate: the joint name, or name.vx ... name.wz.
-std::vector<std::string> velocityLabels(const Model& model) {
-  static const char* ff[] = {".vx", ".vy", ".vz", ".wx", ".wy", ".wz"};
-  std::vector<std::string> labels;
-  for (const Joint& j : model.joints)
-    for (int k = 0; k < j.nv; ++k) labels.push_back(j.nv == 1 ? j.name : j.name + ff[k]);
-  return labels;
-}
-
 struct Options {
   RobotArgs robot;
-  std::string function, spec, frame, reference = "LOCAL_WORLD_ALIGNED", state, format = "json";
+  std::string function, spec, frame, reference = "LOCAL_WORLD_ALIGNED", format = "json";
   std::string backend = "reference";
   bool derivatives = false;
-  std::optional<std::uint64_t> random_state;
+  StateArgs state;
 };
 
 const std::vector<std::string> kFunctions = {"rnea", "aba",      "crba", "gravity",  "nle",
                                              "fk",   "jacobian", "com",  "regressor"};
 
-// The state to evaluate at and its name for messages (the file, or the seed).
 std::pair<State, std::string> loadState(const Options& o, const Model& model, int weight_count = 0) {
-  if (o.random_state)
-    return {randomState(model, *o.random_state, weight_count),
-            "random state (seed " + std::to_string(*o.random_state) + ")"};
-  if (!o.state.empty()) return {readStateFile(o.state), o.state};
-  throw std::invalid_argument("--state FILE or --random-state SEED is required");
+  return cli::loadState(o.state, model, weight_count);
 }
 
 // The frame --frame names, checked against the model.
@@ -188,46 +163,11 @@ std::vector<Eigen::VectorXd> runtimeInputs(const Options& o, const Model& model,
   return runtime;
 }
 
-// Row labels of the value: joints for per-joint vectors and matrices, else indices.
-std::vector<std::string> valueRowLabels(ModelFunction f, const Model& model) {
-  switch (f) {
-    case ModelFunction::FrameJacobian: return {"vx", "vy", "vz", "wx", "wy", "wz"};
-    case ModelFunction::Com: return {"x", "y", "z"};
-    case ModelFunction::Fk: return {};
-    default: return velocityLabels(model);
-  }
-}
-
-// One label per tangent coordinate of the inputs `wrt`, e.g. "q:joint1", "v:joint1".
-std::vector<std::string> tangentLabels(const std::vector<std::string>& wrt, const Model& model) {
-  std::vector<std::string> labels;
-  for (const std::string& w : wrt)
-    for (const std::string& joint : velocityLabels(model)) labels.push_back(w + ":" + joint);
-  return labels;
-}
-
-void printTables(const SpecFunction& f, const std::vector<Eigen::MatrixXd>& out, const Model& model) {
-  const FunctionSpec& spec = f.spec();
-  const std::vector<std::string> value_rows = valueRowLabels(spec.function, model);
-  // Matrices with a column per velocity coordinate: M, M^-1, a frame Jacobian.
-  const bool per_joint_columns = spec.function == ModelFunction::Crba || spec.function == ModelFunction::Minv ||
-                                 spec.function == ModelFunction::FrameJacobian;
-  const std::vector<std::string> value_columns = per_joint_columns ? velocityLabels(model) : std::vector<std::string>{};
-  // Derivative rows are the value's entries: labelled when the value is a vector.
-  const std::vector<std::string> derivative_rows = f.built().value_cols == 1 ? value_rows : std::vector<std::string>{};
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    const BuiltOutput& b = f.built().outputs[k];
-    if (k) std::cout << "\n";
-    if (b.kind == OutputKind::Value && b.cols == 1) {
-      Table::vector(b.name, value_rows, out[k].col(0)).print(std::cout);
-    } else if (b.kind == OutputKind::Value) {
-      Table::matrix(b.name, value_rows, out[k], value_columns).print(std::cout);
-    } else {
-      const std::vector<std::string> columns = tangentLabels(b.wrt, model);
-      const std::vector<std::string>& rows = b.kind == OutputKind::Hessian ? columns : derivative_rows;
-      Table::matrix(b.name, rows, out[k], columns).print(std::cout);
-    }
-  }
+// The blocks of the built function, for printing.
+std::vector<OutputBlockInfo> blockInfos(const SpecFunction& f) {
+  std::vector<OutputBlockInfo> blocks;
+  for (const BuiltOutput& b : f.built().outputs) blocks.push_back({b.name, b.kind, b.wrt});
+  return blocks;
 }
 
 // A spec's outputs (--spec, --derivatives or --backend) by the chosen backend.
@@ -242,17 +182,10 @@ void runSpec(const Options& o) {
   if (o.format == "table") {
     std::cout << label << " of " << (model.name.empty() ? o.robot.urdf : model.name) << " (nq = " << model.nq
               << ", nv = " << model.nv << ", " << o.backend << " backend)\n";
-    printTables(f, out, model);
+    printSpecTables(std::cout, model, spec, blockInfos(f), out);
     return;
   }
-  nlohmann::json j = {{"function", label}, {"backend", o.backend}, {"nq", model.nq}, {"nv", model.nv}};
-  if (functionInfo(spec.function).needs_frame) j["frame"] = spec.frame;
-  if (spec.function == ModelFunction::FrameJacobian) j["reference"] = toString(spec.reference);
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    const bool vector = spec.outputs[k].kind == OutputKind::Value && out[k].cols() == 1;
-    j[f.built().outputs[k].name] = vector ? toJson(Eigen::VectorXd(out[k].col(0))) : toJson(out[k]);
-  }
-  std::cout << j.dump() << "\n";
+  std::cout << specOutputsJson(label, o.backend, model, spec, blockInfos(f), out).dump() << "\n";
 }
 
 void run(const Options& o) {
@@ -277,12 +210,7 @@ void addComputeCommand(CLI::App& app) {
                   "with --derivatives or --backend)");
   cmd->add_option("--reference", options->reference, "Jacobian reference frame (default LOCAL_WORLD_ALIGNED)")
       ->check(CLI::IsMember({"LOCAL", "WORLD", "LOCAL_WORLD_ALIGNED"}));
-  auto* state = cmd->add_option("--state", options->state,
-                                "State JSON {\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}; a spec's "
-                                "Hessian with runtime weights reads \"weights\": [...] (one per value entry)");
-  auto* random = cmd->add_option("--random-state", options->random_state,
-                                 "Use a random state (and random Hessian weights) drawn with this seed");
-  state->excludes(random);
+  addStateOptions(*cmd, options->state);
   cmd->add_option("--backend", options->backend,
                   "reference (default): the value from core/dynamics in double; derivatives from the builder's "
                   "expression graph evaluated node by node (symbolic::Graph::evaluate: slow, but no code "

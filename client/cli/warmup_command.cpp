@@ -20,7 +20,9 @@
 #include "robodiff/workers/worker_pool.hpp"
 #include "cache_location.hpp"
 #include "human_units.hpp"
+#include "service_connection.hpp"
 #include "warmup_progress.hpp"
+#include "warmup_server.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -36,6 +38,8 @@ struct WarmupArgs {
   std::string cache_dir, compiler, budget;
   std::optional<double> timeout_seconds;
   bool json = false;
+  bool on_server = false;  // --server given: the running server builds
+  std::string server;      // its value; empty: $ROBODIFF_SERVER, else auto
 };
 
 // Problems a person fixes on the command line are reported before anything is built:
@@ -70,6 +74,10 @@ cache::Cache openCache(const WarmupArgs& args) { return openCliCache(cacheDirFor
 
 void warmup(const WarmupArgs& args) {
   checkInputs(args);
+  if (args.on_server) {
+    warmupOnServer(targetsOf(args), {args.server, args.timeout_seconds, args.json});
+    return;
+  }
   cache::Cache cache = openCache(args);
 
   workers::WorkerPoolOptions pool_options;
@@ -111,26 +119,35 @@ void addWarmupCommand(CLI::App& app) {
                   "Function specs (JSON, schema/function-spec.schema.json; examples in examples/specs/)")
       ->required()
       ->type_name("SPEC.json");
-  cmd->add_option(
+  CLI::Option* jobs = cmd->add_option(
          "--jobs,-j", args->jobs,
          "Worker processes building at once (default " + std::to_string(defaultJobs()) + ": the cores, at most 2)")
       ->check(CLI::Range(1u, 256u))
       ->type_name("N");
-  cmd->add_option("--cache", args->cache_dir,
+  CLI::Option* cache = cmd->add_option("--cache", args->cache_dir,
                   "Cache directory (default: $ROBODIFF_CACHE_DIR, else $XDG_CACHE_HOME/robodiff, else "
                   "~/.cache/robodiff); created 0700; refused when other users may write to it")
       ->type_name("DIR");
-  cmd->add_option("--compiler", args->compiler, "C compiler to run, a path or a name in PATH (default: $CC, else cc)")
+  CLI::Option* compiler = cmd->add_option("--compiler", args->compiler, "C compiler to run, a path or a name in PATH (default: $CC, else cc)")
       ->type_name("CC");
   cmd->add_option("--timeout", args->timeout_seconds,
                   "Longest one function's build may take; past it the worker is killed and the function fails "
-                  "(default 900)")
+                  "(default 900). With --server: how long to wait for every function to be compiled")
       ->check(CLI::PositiveNumber)
       ->type_name("SECONDS");
-  cmd->add_option("--budget", args->budget,
+  CLI::Option* budget = cmd->add_option("--budget", args->budget,
                   "Size budget of the cache; the least recently used entries not in use are evicted to keep it "
                   "(e.g. 500M, 2G, 1.5GiB, or bytes; default 4G)")
       ->type_name("SIZE");
+  CLI::Option* server =
+      cmd->add_option("--server", args->server,
+                      "Ask the running robodiffd to build them instead (LoadModel and GetFunction for each pair, then "
+                      "ListFunctions until each is compiled or its build failed). ADDR: auto, shm, shm:<service>, dds, "
+                      "dds:<domain>; without it $ROBODIFF_SERVER, else auto")
+          ->expected(0, 1)
+          ->check(serverAddressValidator())
+          ->type_name("[ADDR]");
+  server->excludes(jobs)->excludes(cache)->excludes(compiler)->excludes(budget);
   cmd->add_flag("--json", args->json,
                 "Print JSON lines: {\"event\": \"state\", ...} at each state change, then {\"event\": \"summary\", "
                 "...}");
@@ -139,8 +156,13 @@ void addWarmupCommand(CLI::App& app) {
       "queued, building (model, trace, compile, publish), done (built here) or failed. On a terminal the "
       "functions are redrawn in place under a progress bar with an ETA; otherwise one line per change.\n"
       "Exit status: 0 when every function is cached or built; 1 when one or more failed (each is listed with "
-      "its reason at the end, on stderr too), or on errors (missing file, bad spec, unusable cache directory).");
-  cmd->callback([args] { warmup(*args); });
+      "its reason at the end, on stderr too), or on errors (missing file, bad spec, unusable cache directory). With "
+      "--server: 2 bad usage, 3 no server reachable (UNAVAILABLE); a function served but not compiled (the server's "
+      "build failed, or it compiles nothing) counts as failed.");
+  cmd->callback([args, server] {
+    args->on_server = server->count() > 0;
+    warmup(*args);
+  });
 }
 
 }  // namespace robodiff::cli
