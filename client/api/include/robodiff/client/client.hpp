@@ -10,7 +10,16 @@
 //   Dds   - Cyclone DDS to robodiffd anywhere in the domain.
 // Mode::Auto picks Local when the cache is reachable, then Shm, then Dds.
 //
-// Threads: a Client and its Functions may be shared by many threads. Evaluation never
+// Local and Auto (with the cache reachable): models and functions are still loaded
+// through the server when one answers (so that it builds and caches them); a Function
+// evaluates in-process once its library is in the cache (SHA-256 verified by the cache,
+// pinned while loaded) and through the server until then (the cache is looked at again
+// from calling threads at most every 100 ms). A library that fails verification is never
+// used: Auto evaluates through the server, insisted Local refuses (FAILED_PRECONDITION).
+// Without a server, Local parses the URDF and computes the cache key itself; a function
+// not in the cache is FAILED_PRECONDITION (run `robodiff warmup` or start robodiffd).
+//
+// Threads: a Client and its Functions may be shared by many threads. Local evaluation never
 // allocates after a thread's first call on a Function (the work buffer is per thread),
 // and takes no lock in Local mode. Errors are statuses (StatusCode + message), never a
 // silent wrong value; the throwing calls throw ClientError carrying the status.
@@ -25,6 +34,7 @@
 #include <future>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -94,10 +104,11 @@ class Function {
   // for the output blocks concatenated (sparse blocks: their nnz values in CSR order).
   Status evaluate(std::span<const double> inputs, std::span<double> outputs) const;
   Status evaluate(std::span<const double> inputs, std::span<double> outputs, std::chrono::nanoseconds timeout) const;
-  // knots one after another, in and out.
+  // knots one after another, in and out. Local: one compiled call per knot.
   Status evaluateBatch(std::size_t knots, std::span<const double> inputs, std::span<double> outputs,
                        std::chrono::nanoseconds timeout = std::chrono::nanoseconds(0)) const;
   // The same, returning at once; the spans must stay valid until the future is ready.
+  // Runs on a std::async thread: allocates (not for the hot path).
   std::future<Status> evaluateAsync(std::span<const double> inputs, std::span<double> outputs) const;
 
   // Convenience (allocates): one Eigen vector per input block in, dense matrices out.

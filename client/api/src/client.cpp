@@ -1,0 +1,209 @@
+// Client: loading models and functions, through the server when there is one, else from
+// the local cache.
+#include <fstream>
+#include <sstream>
+
+#include "client_impl.hpp"
+#include "robodiff/model/canonical.hpp"
+#include "robodiff/model/urdf_loader.hpp"
+#include "robodiff/workers/build_job.hpp"
+
+namespace robodiff::client {
+namespace {
+
+ModelInfo infoFrom(const rpc::LoadModelReply& reply) {
+  ModelInfo info;
+  info.id = reply.model_id;
+  info.joint_names = reply.joint_names;
+  info.frame_names = reply.frame_names;
+  info.nq = static_cast<int>(reply.nq);
+  info.nv = static_cast<int>(reply.nv);
+  return info;
+}
+
+void throwIfFailed(const Status& s) {
+  if (!s.ok()) throw ClientError(s);
+}
+
+}  // namespace
+
+Client::Client(ClientOptions options) : impl_(connectClient(std::move(options))) {}
+Client::~Client() = default;
+Client::Client(Client&&) noexcept = default;
+Client& Client::operator=(Client&&) noexcept = default;
+
+Mode Client::mode() const { return impl_->mode(); }
+
+ModelInfo Client::loadModel(const std::string& urdf_text, bool floating_base) {
+  Impl& c = *impl_;
+  Impl::ModelRecord record;
+  record.urdf = urdf_text;
+  record.floating_base = floating_base;
+  bool loaded = false;
+  if (c.connection && (!c.localCapable() || c.serverPresent())) {
+    rpc::LoadModelRequest request;
+    request.urdf = urdf_text;
+    request.floating_base = floating_base;
+    rpc::LoadModelReply reply;
+    const Status s = c.connection->loadModel(request, reply, c.callOptions());
+    if (s.ok()) {
+      record.info = infoFrom(reply);
+      loaded = true;
+    } else if (s.code != StatusCode::Unavailable || !c.localCapable()) {
+      throw ClientError(s);
+    }
+  } else if (!c.localCapable()) {
+    throw ClientError(c.noServer());
+  }
+  if (!loaded) {  // Local without a server: the same id, computed here
+    try {
+      auto model = std::make_shared<const Model>(
+          loadUrdfString(urdf_text, floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed));
+      record.info.id = canonicalHash(*model);
+      record.info.joint_names = model->jointNames();
+      record.info.frame_names = model->frameNames();
+      record.info.nq = model->nq;
+      record.info.nv = model->nv;
+      record.model = std::move(model);
+    } catch (const std::exception& e) {
+      throw ClientError({StatusCode::InvalidArgument, e.what()});
+    }
+  }
+  std::lock_guard lock(c.registry_mutex);
+  Impl::ModelRecord& kept = c.models[record.info.id];
+  if (kept.info.id.empty()) kept = record;
+  return record.info;
+}
+
+ModelInfo Client::loadModelFile(const std::filesystem::path& urdf_path, bool floating_base) {
+  std::ifstream in(urdf_path, std::ios::binary);
+  if (!in) throw ClientError({StatusCode::InvalidArgument, "cannot read the URDF file " + urdf_path.string()});
+  std::stringstream text;
+  text << in.rdbuf();
+  return loadModel(text.str(), floating_base);
+}
+
+Function Client::function(const ModelInfo& model, const std::string& spec_json) {
+  Impl& c = *impl_;
+  if (!c.knowsModel(model.id))
+    throw ClientError({StatusCode::NotFound, "model " + model.id + " was not loaded by this client (loadModel first)"});
+  auto f = std::make_shared<Function::Impl>();
+  f->client = impl_;
+  f->model_id = model.id;
+  f->spec_json = spec_json;
+  bool spec_parsed = false;
+  std::string spec_problem;
+  try {
+    f->spec = parseFunctionSpec(spec_json, "spec_json");
+    spec_parsed = true;
+  } catch (const std::exception& e) {
+    spec_problem = e.what();
+  }
+
+  bool from_server = false;
+  if (c.connection && (!c.localCapable() || c.serverPresent())) {
+    rpc::GetFunctionRequest request;
+    request.model_id = model.id;
+    request.spec_json = spec_json;
+    request.wait = true;
+    rpc::GetFunctionReply reply;
+    const std::uint64_t generation = c.generation.load();
+    Status s = c.connection->getFunction(request, reply, c.callOptions());
+    if (s.code == StatusCode::NotFound) {  // a new server that does not know our model yet
+      if (Status r = c.reregister(generation); r.ok()) s = c.connection->getFunction(request, reply, c.callOptions());
+    }
+    if (s.ok() && reply.state != rpc::FunctionState::Ready)
+      s = {StatusCode::Internal, "GetFunction(wait) answered OK in state " + std::string(rpc::toString(reply.state))};
+    if (s.ok()) {
+      f->id = reply.function_id;
+      f->layout = std::move(reply);
+      from_server = true;
+    } else if (s.code != StatusCode::Unavailable || !c.localCapable()) {
+      throw ClientError(s);
+    }
+  } else if (!c.localCapable()) {
+    throw ClientError(c.noServer());
+  }
+  if (!spec_parsed) {
+    if (!from_server) throw ClientError({StatusCode::InvalidArgument, spec_problem});
+  } else if (c.localCapable()) {
+    // The key the server builds under (prepareBuild with function name "" and the
+    // default compiler), computed from the model parsed here.
+    std::string key_problem;
+    try {
+      f->key = workers::prepareBuild(*c.localModel(model.id), f->spec, "", "").key;
+    } catch (const ClientError&) {
+      throw;
+    } catch (const std::exception& e) {
+      key_problem = e.what();
+    }
+    std::string problem = key_problem;
+    bool local = false;
+    if (!f->key.empty()) {
+      std::lock_guard lock(f->switch_mutex);
+      local = f->tryLoadLocal(&problem);
+    }
+    if (!from_server) {
+      if (!local)
+        throw ClientError({StatusCode::FailedPrecondition,
+                           "function " + spec_json.substr(0, 200) + " on model " + model.id +
+                               " is not in the local cache " + c.cache->dir().string() +
+                               (problem.empty() ? "" : " (" + problem + ")") +
+                               " and no robodiffd answers: run `robodiff warmup` for it, or start robodiffd"});
+      f->layout = f->local.load()->layout();
+      f->id = sha256Hex(model.id + "\n" + normalizedSpecJson(f->spec)).substr(0, 32);
+      f->layout.function_id = f->id;
+    } else if (!local && !f->key.empty()) {
+      // Not in the cache (yet): the server compiles it, or our copy was refused.
+      const std::optional<rpc::FunctionSummary> summary = c.summary(f->id);
+      const bool server_compiled = summary && summary->compiled;
+      if (server_compiled && problem.empty()) {  // compiled between our look and its answer?
+        std::lock_guard lock(f->switch_mutex);
+        local = f->tryLoadLocal(&problem);
+      }
+      if (!local) {
+        if (c.requested == Mode::Local && (server_compiled || !problem.empty()))
+          throw ClientError({StatusCode::FailedPrecondition,
+                             "mode local: function " + f->id + ": the server compiled it but its library in " +
+                                 c.cache->dir().string() + " cannot be used here" +
+                                 (problem.empty() ? std::string(" (missing, or refused: a library whose SHA-256 "
+                                                                "does not match the index is quarantined)")
+                                                  : " (" + problem + ")") +
+                                 "; use mode auto to evaluate through the server"});
+        // Through the server for now; the cache is looked at again from the calling thread.
+        f->local_candidate = problem.empty();
+        f->next_check_ns.store(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   std::chrono::steady_clock::now().time_since_epoch())
+                                   .count() +
+                               100'000'000);
+      }
+    } else if (c.requested == Mode::Local && f->key.empty()) {
+      throw ClientError({StatusCode::FailedPrecondition,
+                         "mode local: the cache key of function " + f->id + " cannot be computed here: " + key_problem});
+    }
+  }
+  f->offsets = detail::BlockOffsets::of(f->layout);
+  {
+    std::lock_guard lock(c.registry_mutex);
+    c.functions[f->id] = Impl::FunctionRecord{model.id, spec_json};
+  }
+  return Function(std::move(f));
+}
+
+rpc::HealthReply Client::health() {
+  Impl& c = *impl_;
+  if (!c.connection) throw ClientError(c.noServer());
+  rpc::HealthReply reply;
+  throwIfFailed(c.connection->health({}, reply, c.callOptions()));
+  return reply;
+}
+
+std::vector<rpc::FunctionSummary> Client::functions() {
+  Impl& c = *impl_;
+  if (!c.connection) throw ClientError(c.noServer());
+  rpc::ListFunctionsReply reply;
+  throwIfFailed(c.connection->listFunctions({}, reply, c.callOptions()));
+  return std::move(reply.functions);
+}
+
+}  // namespace robodiff::client
