@@ -293,8 +293,12 @@ TEST(Cache, VerifyReportsTruncatedAndCorruptArtifacts) {
   for (const VerifyProblem& p : report.problems) keys.insert(p.key);
   EXPECT_EQ(keys, (std::set<std::string>{keyOf("a"), keyOf("b")}));
   for (const VerifyProblem& p : report.problems) {
-    if (p.key == keyOf("a")) EXPECT_NE(p.problem.find("truncated"), std::string::npos) << p.problem;
-    if (p.key == keyOf("b")) EXPECT_NE(p.problem.find("SHA-256 mismatch"), std::string::npos) << p.problem;
+    if (p.key == keyOf("a")) {
+      EXPECT_NE(p.problem.find("truncated"), std::string::npos) << p.problem;
+    }
+    if (p.key == keyOf("b")) {
+      EXPECT_NE(p.problem.find("SHA-256 mismatch"), std::string::npos) << p.problem;
+    }
   }
   EXPECT_EQ(cache.verify().problems.size(), 0u);
   EXPECT_EQ(cache.list().size(), 1u);
