@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
                     timeCalls([&] { check(f_dds.evaluate(in, out)); }, calls / 200)});
 
     // The 1 kHz controller loop, as a process of its own, in local and shm modes.
-    for (const char* address : {"local", "shm"}) {
+    for (const char* address : {"local --realtime", "local", "shm"}) {
       const std::string command = (fs::path(ROBODIFFD_PATH).parent_path() / "controller_loop").string() +
                                   " --urdf " + robot.string() + " --seconds " + std::to_string(loop_seconds) +
                                   " --server " + address + " --cache " + cache_dir.string() + " 2>&1";
