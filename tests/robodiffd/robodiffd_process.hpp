@@ -73,7 +73,10 @@ class RobodiffdProcess {
     ADD_FAILURE() << "robodiffd did not serve within " << timeout.count() << " s; log:\n" << log();
   }
 
-  ~RobodiffdProcess() { kill(); }
+  // SIGTERM, not SIGKILL: a robodiffd killed while one of its threads holds an iceoryx
+  // port's inter-process mutex (sending a reply) leaves that mutex locked, and RouDi then
+  // deadlocks cleaning up after it (iceoryx 2.0). Tests that mean a crash call kill().
+  ~RobodiffdProcess() { terminate(std::chrono::seconds(30)); }
   RobodiffdProcess(const RobodiffdProcess&) = delete;
   RobodiffdProcess& operator=(const RobodiffdProcess&) = delete;
 
@@ -101,9 +104,12 @@ class RobodiffdProcess {
     return -1;
   }
 
-  // SIGKILL (a crash), and reap.
-  void kill() {
+  // SIGKILL (a crash), and reap. After `settle` first, so that the kill finds robodiffd
+  // idle: killed in the middle of an iceoryx send it would leave a port's mutex locked
+  // and RouDi hung (iceoryx 2.0), which no test here means to exercise.
+  void kill(std::chrono::milliseconds settle = std::chrono::milliseconds(100)) {
     if (pid_ <= 0) return;
+    std::this_thread::sleep_for(settle);
     ::kill(pid_, SIGKILL);
     int status = 0;
     waitpid(pid_, &status, 0);

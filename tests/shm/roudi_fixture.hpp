@@ -76,23 +76,17 @@ class RoudiProcess {
   RoudiProcess(const RoudiProcess&) = delete;
   RoudiProcess& operator=(const RoudiProcess&) = delete;
 
-  // SIGINT (RouDi removes its shared memory and socket), SIGKILL after 5 s. Only the
-  // process that started it stops it (not a forked child).
+  // SIGKILL, then its socket and shared memory removed. Not SIGINT: a RouDi shutting down
+  // sends SIGTERM to every process still registered with it (this test process's runtime
+  // lives to its end), and it hangs for good when a killed robodiffd left a port's mutex
+  // locked (iceoryx 2.0). Only the process that started it stops it (not a forked child).
   void stop() {
-    using namespace std::chrono_literals;
     if (pid_ <= 0 || ::getpid() != owner_) return;
-    ::kill(pid_, SIGINT);
-    const auto until = std::chrono::steady_clock::now() + 5s;
+    ::kill(pid_, SIGKILL);
     int status = 0;
-    while (::waitpid(pid_, &status, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > until) {
-        ::kill(pid_, SIGKILL);
-        ::waitpid(pid_, &status, 0);
-        break;
-      }
-      std::this_thread::sleep_for(10ms);
-    }
+    ::waitpid(pid_, &status, 0);
     pid_ = -1;
+    shm::removeRoudiLeftovers();
     std::error_code ignored;
     if (std::getenv("ROBODIFF_KEEP_ROUDI_LOG") == nullptr) std::filesystem::remove(log_, ignored);
   }

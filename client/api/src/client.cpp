@@ -182,7 +182,7 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
                          "mode local: the cache key of function " + f->id + " cannot be computed here: " + key_problem});
     }
   }
-  f->offsets = detail::BlockOffsets::of(f->layout);
+  f->blocks = runtime::FunctionLayout::fromReply(f->layout);
   {
     std::lock_guard lock(c.registry_mutex);
     c.functions[f->id] = Impl::FunctionRecord{model.id, spec_json};

@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-#include "input_check.hpp"
+#include "robodiff/runtime/function_layout.hpp"
 #include "local_evaluator.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/client/client.hpp"
@@ -81,7 +81,7 @@ struct Function::Impl {
   std::shared_ptr<Client::Impl> client;
   std::string id, model_id, spec_json;
   rpc::GetFunctionReply layout;
-  detail::BlockOffsets offsets;
+  runtime::FunctionLayout blocks;  // the layout's blocks with their offsets (sizes, checks)
   FunctionSpec spec;
 
   // Local evaluation: set once (then never changed) when the library is loaded.

@@ -2,6 +2,7 @@
 #include <stdexcept>
 
 #include "client_impl.hpp"
+#include "robodiff/runtime/input_check.hpp"
 
 namespace robodiff::client {
 namespace {
@@ -17,17 +18,17 @@ Function::Impl& checked(const std::shared_ptr<Function::Impl>& impl) {
 
 const std::string& Function::id() const { return checked(impl_).id; }
 const rpc::GetFunctionReply& Function::layout() const { return checked(impl_).layout; }
-std::size_t Function::inputCount() const { return checked(impl_).offsets.input_count; }
-std::size_t Function::outputCount() const { return checked(impl_).offsets.output_count; }
+std::size_t Function::inputCount() const { return checked(impl_).blocks.input_count; }
+std::size_t Function::outputCount() const { return checked(impl_).blocks.output_count; }
 Mode Function::mode() const { return checked(impl_).mode(); }
 
 Status Function::Impl::evaluateLocal(const detail::LocalEvaluator& evaluator, std::uint64_t knots,
                                      std::span<const double> inputs, std::span<double> outputs, bool batch) const {
-  const std::uint32_t in_n = offsets.input_count, out_n = offsets.output_count;
+  const std::uint32_t in_n = blocks.input_count, out_n = blocks.output_count;
   if (inputs.size() != knots * in_n || outputs.size() != knots * out_n) [[unlikely]]
-    return detail::checkSizes(id, layout, offsets, knots, inputs.size(), outputs.size(), batch);
-  if (!detail::allFinite(inputs)) [[unlikely]]
-    return detail::checkFinite(layout, offsets, inputs, batch);
+    return runtime::checkSizes(id, blocks, knots, inputs.size(), outputs.size(), batch);
+  if (!runtime::allFinite(inputs)) [[unlikely]]
+    return runtime::checkFinite(blocks, inputs, batch);
   const double* in = inputs.data();
   double* out = outputs.data();
   for (std::uint64_t k = 0; k < knots; ++k, in += in_n, out += out_n) evaluator.evaluate(in, out);
@@ -39,8 +40,8 @@ Status Function::Impl::evaluateRemote(std::uint64_t knots, std::span<const doubl
   Client::Impl& c = *client;
   // Sizes are checked here as in Local mode: the transports do not send the output size,
   // so the server could not say that the outputs do not fit.
-  if (inputs.size() != knots * offsets.input_count || outputs.size() != knots * offsets.output_count)
-    return detail::checkSizes(id, layout, offsets, knots, inputs.size(), outputs.size(), batch);
+  if (inputs.size() != knots * blocks.input_count || outputs.size() != knots * blocks.output_count)
+    return runtime::checkSizes(id, blocks, knots, inputs.size(), outputs.size(), batch);
   if (!c.connection) return c.noServer();
   const CallOptions options = c.callOptions(timeout);
   auto call = [&] {
@@ -110,7 +111,7 @@ Outputs Function::operator()(const std::vector<Eigen::VectorXd>& inputs) const {
                                                         std::to_string(inputs.size())});
   }
   std::vector<double> in;
-  in.reserve(f.offsets.input_count);
+  in.reserve(f.blocks.input_count);
   for (std::size_t b = 0; b < inputs.size(); ++b) {
     if (inputs[b].size() != static_cast<Eigen::Index>(f.layout.inputs[b].size))
       throw ClientError({StatusCode::InvalidArgument, "function " + f.id + ": input block " + f.layout.inputs[b].name +
@@ -118,13 +119,13 @@ Outputs Function::operator()(const std::vector<Eigen::VectorXd>& inputs) const {
                                                           " doubles, given " + std::to_string(inputs[b].size())});
     in.insert(in.end(), inputs[b].data(), inputs[b].data() + inputs[b].size());
   }
-  std::vector<double> out(f.offsets.output_count);
+  std::vector<double> out(f.blocks.output_count);
   const Status s = evaluate(in, out);
   if (!s.ok()) throw ClientError(s);
   Outputs result;
   for (std::size_t k = 0; k < f.layout.outputs.size(); ++k) {
     const rpc::OutputBlock& b = f.layout.outputs[k];
-    const double* values = out.data() + f.offsets.outputs[k];
+    const double* values = out.data() + f.blocks.output_offsets[k];
     Eigen::MatrixXd m = Eigen::MatrixXd::Zero(b.rows, b.cols);
     if (b.layout == rpc::OutputLayout::SparseCsr) {
       for (std::uint32_t r = 0; r < b.rows; ++r)

@@ -1,6 +1,8 @@
 // The process-wide iceoryx runtime and the fast "is RouDi running" check.
 #include "robodiff/schema/shm_runtime.hpp"
 
+#include <grp.h>
+#include <sys/mman.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -41,6 +43,14 @@ bool canConnect(const std::string& path, int type, int& error) {
 }  // namespace
 
 std::string roudiSocketPath() { return std::string("/tmp/") + iox::roudi::IPC_CHANNEL_ROUDI_NAME; }
+
+void removeRoudiLeftovers() {
+  if (roudiRunning()) return;
+  ::unlink(roudiSocketPath().c_str());
+  ::shm_unlink("/iceoryx_mgmt");
+  // The data segment is named after the user's group.
+  if (const group* g = ::getgrgid(::getgid())) ::shm_unlink((std::string("/") + g->gr_name).c_str());
+}
 
 bool roudiRunning() {
   const std::string path = roudiSocketPath();

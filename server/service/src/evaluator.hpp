@@ -10,12 +10,14 @@
 #include <memory>
 #include <optional>
 
-#include "function_layout.hpp"
+#include "robodiff/runtime/function_layout.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/codegen/interpreter.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 
 namespace robodiff::server::detail {
+
+using runtime::FunctionLayout;
 
 class Evaluator {
  public:

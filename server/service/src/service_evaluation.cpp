@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "input_check.hpp"
+#include "robodiff/runtime/input_check.hpp"
 #include "robodiff/server/service.hpp"
 #include "service_state.hpp"
 
@@ -121,8 +121,8 @@ Status Service::evaluate(const CallContext& ctx, std::string_view function_id, s
   std::shared_ptr<const Evaluator> evaluator;
   if (Status st = servable(s.registry, function_id, function, evaluator); !st.ok()) return st;
   const FunctionLayout& layout = evaluator->layout();
-  if (Status st = detail::checkSizes(function_id, layout, 1, inputs.size(), outputs.size(), false); !st.ok()) return st;
-  if (Status st = detail::checkFinite(layout, inputs, false); !st.ok()) return st;
+  if (Status st = runtime::checkSizes(function_id, layout, 1, inputs.size(), outputs.size(), false); !st.ok()) return st;
+  if (Status st = runtime::checkFinite(layout, inputs, false); !st.ok()) return st;
 
   ThreadBuffers& b = buffers;
   const std::size_t n_in = layout.inputs.size(), n_out = layout.outputs.size();
@@ -151,9 +151,9 @@ Status Service::evaluateBatch(const CallContext& ctx, std::string_view function_
                                                "takes (max_batch_knots = " +
                                                std::to_string(s.options.max_batch_knots) + "); split the batch"};
   const FunctionLayout& layout = evaluator->layout();
-  if (Status st = detail::checkSizes(function_id, layout, knots, inputs.size(), outputs.size(), true); !st.ok())
+  if (Status st = runtime::checkSizes(function_id, layout, knots, inputs.size(), outputs.size(), true); !st.ok())
     return st;
-  if (Status st = detail::checkFinite(layout, inputs, true); !st.ok()) return st;
+  if (Status st = runtime::checkFinite(layout, inputs, true); !st.ok()) return st;
   if (knots == 0) return {};
 
   // Pieces: a multiple of the batched entry point's width, about kPiecesPerThread per thread.

@@ -3,7 +3,6 @@
 #include "robodiff/server/shm_roudi.hpp"
 
 #include <fcntl.h>
-#include <grp.h>
 #include <sys/mman.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -51,11 +50,7 @@ class OwnedRoudi final : public RoudiHandle {
   ~OwnedRoudi() override {
     ::kill(pid_, SIGKILL);
     ::waitpid(pid_, nullptr, 0);
-    if (!shm::roudiRunning()) {
-      ::unlink(shm::roudiSocketPath().c_str());
-      ::shm_unlink("/iceoryx_mgmt");
-      if (const group* g = ::getgrgid(::getgid())) ::shm_unlink((std::string("/") + g->gr_name).c_str());
-    }
+    shm::removeRoudiLeftovers();
     std::error_code ignored;
     std::filesystem::remove(config_, ignored);
   }

@@ -23,6 +23,11 @@ std::string roudiSocketPath();
 // that died refuses the connection, so a stale file reads as "not running".
 bool roudiRunning();
 
+// After a RouDi was killed (SIGKILL: a RouDi stopped with SIGINT sends SIGTERM to every
+// process still registered with it, and hangs if a crashed process left a port's mutex
+// locked): removes its socket and shared memory, unless a RouDi runs again meanwhile.
+void removeRoudiLeftovers();
+
 // Sets iceoryx's own log level to warnings and errors (its default is verbose). Called by
 // ensureRuntime(); callable before embedding a RouDi.
 void quietIceoryxLogs();

@@ -1,5 +1,6 @@
 #pragma once
-// A function's blocks as GetFunction reports them and as evaluation uses them: input
+// A function's blocks as GetFunction reports them and as evaluation uses them (by the
+// server, and by a client evaluating a cached library in its own process): input
 // blocks (name, size) and output blocks (kind, shape, dense or CSR layout), with each
 // block's offset in the concatenated inputs / outputs of one knot.
 //
@@ -17,7 +18,7 @@
 #include "robodiff/functions/function_spec.hpp"
 #include "robodiff/schema/messages.hpp"
 
-namespace robodiff::server::detail {
+namespace robodiff::runtime {
 
 struct FunctionLayout {
   std::vector<rpc::InputBlock> inputs;
@@ -30,6 +31,8 @@ struct FunctionLayout {
   // Throws std::invalid_argument when the blocks do not match the spec's outputs.
   static FunctionLayout fromDefinition(const codegen::FunctionDefinition& definition, const FunctionSpec& spec);
   static FunctionLayout fromDescriptor(const robodiff_function_desc& descriptor, const FunctionSpec& spec);
+  // From what GetFunction returned (a client's view of a server's function).
+  static FunctionLayout fromReply(const rpc::GetFunctionReply& reply);
 
   // The input block holding double `index` of a knot (index < input_count).
   std::size_t inputBlockOf(std::uint32_t index) const;
@@ -38,4 +41,4 @@ struct FunctionLayout {
   std::string differenceFrom(const FunctionLayout& other) const;
 };
 
-}  // namespace robodiff::server::detail
+}  // namespace robodiff::runtime

@@ -1,9 +1,9 @@
-#include "input_check.hpp"
+#include "robodiff/runtime/input_check.hpp"
 
 #include <cmath>
 #include <string>
 
-namespace robodiff::server::detail {
+namespace robodiff::runtime {
 
 Status checkSizes(std::string_view function_id, const FunctionLayout& layout, std::uint64_t knots, std::size_t inputs,
                   std::size_t outputs, bool batch) {
@@ -47,4 +47,4 @@ Status checkFinite(const FunctionLayout& layout, std::span<const double> inputs,
   return {StatusCode::InvalidArgument, message};
 }
 
-}  // namespace robodiff::server::detail
+}  // namespace robodiff::runtime

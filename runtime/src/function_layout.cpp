@@ -1,9 +1,9 @@
-#include "function_layout.hpp"
+#include "robodiff/runtime/function_layout.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
-namespace robodiff::server::detail {
+namespace robodiff::runtime {
 namespace {
 
 rpc::OutputKind kindOf(robodiff::OutputKind kind) {
@@ -81,6 +81,14 @@ FunctionLayout FunctionLayout::fromDescriptor(const robodiff_function_desc& d, c
   return layout;
 }
 
+FunctionLayout FunctionLayout::fromReply(const rpc::GetFunctionReply& reply) {
+  FunctionLayout layout;
+  layout.inputs = reply.inputs;
+  layout.outputs = reply.outputs;
+  finish(layout);
+  return layout;
+}
+
 std::size_t FunctionLayout::inputBlockOf(std::uint32_t index) const {
   // upper_bound finds the first offset past index; the block starts one before it.
   const auto it = std::upper_bound(input_offsets.begin(), input_offsets.end(), index);
@@ -112,4 +120,4 @@ std::string FunctionLayout::differenceFrom(const FunctionLayout& other) const {
   return {};
 }
 
-}  // namespace robodiff::server::detail
+}  // namespace robodiff::runtime
