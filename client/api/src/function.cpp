@@ -50,9 +50,10 @@ Status Function::Impl::evaluateRemote(std::uint64_t knots, std::span<const doubl
   };
   const std::uint64_t generation = c.generation.load();
   Status s = call();
-  if (s.code == StatusCode::NotFound && c.knowsFunction(id)) {
-    // A server that does not know this function: a restarted one. Register everything
-    // again, then retry once.
+  if ((s.code == StatusCode::NotFound || s.code == StatusCode::FailedPrecondition) && c.knowsFunction(id)) {
+    // A server that does not know this function (a restarted one), or knows it only as
+    // still being built (another client registered it there a moment ago): register
+    // everything again, which waits until it is ready, then retry once.
     const Status r = c.reregister(generation);
     if (!r.ok()) return r;
     s = call();

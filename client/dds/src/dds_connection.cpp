@@ -108,7 +108,7 @@ void DdsConnection::updateMatched() {
   // matched_ can register (and one who cannot register waits for matched_).
   if (now) {
     pending_->open();
-    matched_since_ = Clock::now();
+    confirmed_ = false;
   } else {
     pending_->close(StatusCode::Unavailable,
                     "robodiffd went away on DDS domain " + std::to_string(domainId()) + ", topic " +
@@ -123,21 +123,31 @@ bool DdsConnection::waitMatched(Clock::time_point until) {
   return match_cv_.wait_until(lock, until, [&] { return matched_; });
 }
 
-// Our side sees the server; give the server a moment to see us too (its reader must know our
-// writer, its writer our reader) before the first request after a (re)match.
-void DdsConnection::settleAfterMatch() {
-  Clock::time_point since;
-  {
-    std::lock_guard lock(match_mutex_);
-    since = matched_since_;
+// Our side sees the server; until the server has seen us too, what we send (or what it
+// answers) may be lost. A Health probe that is answered proves both directions; probes
+// that time out are sent again until `deadline`.
+Status DdsConnection::confirmServer(Clock::time_point deadline) {
+  std::lock_guard lock(confirm_mutex_);
+  while (!confirmed_) {
+    const auto now = Clock::now();
+    if (now >= deadline)
+      return {StatusCode::DeadlineExceeded, "robodiffd on DDS domain " + std::to_string(domainId()) + ", topic " +
+                                                endpoints_->writerTopic() +
+                                                " was discovered but answered no probe before the deadline"};
+    CallOptions probe;
+    probe.timeout = std::min<std::chrono::nanoseconds>(options_.probe_timeout, deadline - now);
+    rpc::HealthReply ignored;
+    const Status s = healthCall({}, ignored, probe, false);
+    if (s.code == StatusCode::Unavailable) return s;
+    if (s.code != StatusCode::DeadlineExceeded) confirmed_ = true;  // any answer will do
   }
-  const auto ready = since + std::chrono::duration_cast<Clock::duration>(options_.settle);
-  if (Clock::now() < ready) std::this_thread::sleep_until(ready);
+  return {};
 }
 
 // ---- calls -----------------------------------------------------------------------------------
 
-Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options) {
+Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options,
+                           bool confirm) {
   const auto start = Clock::now();
   const auto timeout = std::chrono::duration_cast<Clock::duration>(
       options.timeout.count() > 0 ? options.timeout : options_.connection.default_timeout);
@@ -156,7 +166,13 @@ Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume con
                                            seconds(match_limit - start) + "; is it running?"};
   }
 
-  settleAfterMatch();
+  if (confirm && !confirmed_) {
+    pending_->remove(id);
+    if (Status s = confirmServer(deadline); !s.ok()) return s;
+    if (!pending_->add(id, call))
+      return {StatusCode::Unavailable, "robodiffd went away on DDS domain " + std::to_string(domainId()) + ", topic " +
+                                           endpoints_->writerTopic() + " just after answering; retry when it is back"};
+  }
 
   dds_codec::WireRequest request;
   rpc::RequestHeader header;
@@ -229,6 +245,11 @@ Status DdsConnection::listFunctions(const rpc::ListFunctionsRequest& request, rp
 }
 
 Status DdsConnection::health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options) {
+  return healthCall(request, reply, options, true);
+}
+
+Status DdsConnection::healthCall(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options,
+                                 bool confirm) {
   return call(
       rpc::Method::Health,
       [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
@@ -240,7 +261,7 @@ Status DdsConnection::health(const rpc::HealthRequest& request, rpc::HealthReply
         dds_codec::fromWire(r.body._u.health, reply);
         return Status{};
       },
-      options);
+      options, confirm);
 }
 
 Status DdsConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {

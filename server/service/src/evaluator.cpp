@@ -1,38 +1,11 @@
 #include "evaluator.hpp"
 
-#include <nlohmann/json.hpp>
+#include "robodiff/runtime/cached_function.hpp"
 
 namespace robodiff::server::detail {
-namespace {
-
-// The index row's {"inputs": [...], "outputs": [...]} as expectations; unset when absent.
-void expectSizes(const std::string& sizes_json, codegen::FunctionExpectations& expected) {
-  if (sizes_json.empty()) return;
-  const nlohmann::json sizes = nlohmann::json::parse(sizes_json, nullptr, false);
-  if (!sizes.is_object()) return;
-  auto read = [&](const char* key) -> std::optional<std::vector<std::uint32_t>> {
-    const auto it = sizes.find(key);
-    if (it == sizes.end() || !it->is_array()) return std::nullopt;
-    std::vector<std::uint32_t> out;
-    for (const auto& v : *it) {
-      if (!v.is_number_unsigned()) return std::nullopt;
-      out.push_back(v.get<std::uint32_t>());
-    }
-    return out;
-  };
-  expected.input_sizes = read("inputs");
-  expected.output_sizes = read("outputs");
-}
-
-}  // namespace
 
 std::shared_ptr<const CompiledEvaluator> loadCompiled(const cache::Artifact& artifact, const FunctionSpec& spec) {
-  const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(artifact.library());
-  codegen::FunctionExpectations expected;
-  expected.name = artifact.entry().info.function.empty() ? std::string(functionInfo(spec.function).name)
-                                                         : artifact.entry().info.function;
-  expectSizes(artifact.entry().info.sizes, expected);
-  codegen::CompiledFunction function = library.function(expected);
+  codegen::CompiledFunction function = runtime::openCachedFunction(artifact, spec);
   FunctionLayout layout = FunctionLayout::fromDescriptor(function.descriptor(), spec);
   return std::make_shared<const CompiledEvaluator>(std::move(layout), artifact, std::move(function));
 }

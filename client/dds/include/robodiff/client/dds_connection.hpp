@@ -47,10 +47,11 @@ struct DdsConnectionOptions {
   // This participant's DDS lease: how soon a server forgets this client after it died
   // (until then the server keeps its replies for it). 0: the configuration's (10 s).
   std::chrono::milliseconds lease = std::chrono::seconds(0);
-  // After a server is first seen, the first request waits this long: our side saw the
-  // server's endpoints, the server may need a moment more to see ours (else the request or
-  // its reply could be dropped).
-  std::chrono::milliseconds settle = std::chrono::milliseconds(50);
+  // After a server is (re)discovered, the first call first sends Health probes, each
+  // waiting this long for its reply, until one is answered: our side seeing the server
+  // does not mean the server sees us yet, and a request or reply sent before it does is
+  // lost. Any reply proves both directions.
+  std::chrono::milliseconds probe_timeout = std::chrono::milliseconds(250);
 };
 
 class DdsConnection final : public Connection {
@@ -85,9 +86,11 @@ class DdsConnection final : public Connection {
   // after the write), or nullptr.
   using Encode = std::function<dds_sequence_double*(robodiff_wire_RequestBody& body)>;
   using Consume = std::function<Status(const robodiff_wire_Reply& reply, bool& complete)>;
-  Status call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options);
+  // `confirm`: make sure the server answers at all first (confirmServer) after a (re)match.
+  Status call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options, bool confirm = true);
   bool waitMatched(std::chrono::steady_clock::time_point until);
-  void settleAfterMatch();
+  Status confirmServer(std::chrono::steady_clock::time_point deadline);
+  Status healthCall(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options, bool confirm);
   void receiveLoop();
   void takeReplies();
   void updateMatched();
@@ -101,7 +104,8 @@ class DdsConnection final : public Connection {
   mutable std::mutex match_mutex_;
   std::condition_variable match_cv_;
   bool matched_ = false;
-  std::chrono::steady_clock::time_point matched_since_;
+  std::atomic<bool> confirmed_{false};  // a probe was answered since the last (re)match
+  std::mutex confirm_mutex_;            // one probing thread at a time
 
   std::int32_t guard_ = 0;  // dds_entity_t: wakes the receive thread on destruction
   std::atomic<bool> stopping_{false};
