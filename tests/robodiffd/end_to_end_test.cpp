@@ -54,6 +54,23 @@ class EndToEnd : public ::testing::TestWithParam<std::string> {
     return function.function_id;
   }
 
+  // LoadModel(the humanoid, floating base) and a GetFunction request (wait) for its ABA
+  // Jacobian: a function that takes a while to trace.
+  rpc::GetFunctionRequest humanoidAbaJacobian(client::Connection& c) {
+    rpc::LoadModelRequest load;
+    load.urdf = readFile(sourceDir() / "examples/robots/humanoid.urdf");
+    load.floating_base = true;
+    rpc::LoadModelReply model;
+    const Status s = c.loadModel(load, model);
+    EXPECT_TRUE(s.ok()) << s.message;
+    rpc::GetFunctionRequest get;
+    get.model_id = model.model_id;
+    get.spec_json =
+        R"({"function": "aba", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", "tau"]}]})";
+    get.wait = true;
+    return get;
+  }
+
   std::vector<double> evaluate(client::Connection& c, const std::string& id, const Eigen::VectorXd& in,
                                Status* status = nullptr) {
     std::vector<double> out(model_.nv + 3 * model_.nv * model_.nv, std::nan(""));
@@ -210,15 +227,7 @@ TEST_P(EndToEnd, MalformedRequestsGetTheRightStatusAndTheServerKeepsServing) {
 TEST_P(EndToEnd, DeadlineThatExpires) {
   startServer();
   auto c = connectTo(GetParam());
-  rpc::LoadModelRequest load;
-  load.urdf = readFile(sourceDir() / "examples/robots/humanoid.urdf");
-  load.floating_base = true;
-  rpc::LoadModelReply model;
-  ASSERT_TRUE(c->loadModel(load, model).ok());
-  rpc::GetFunctionRequest get;
-  get.model_id = model.model_id;
-  get.spec_json = R"({"function": "aba", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", "tau"]}]})";
-  get.wait = true;
+  rpc::GetFunctionRequest get = humanoidAbaJacobian(*c);
   rpc::GetFunctionReply function;
   const auto start = std::chrono::steady_clock::now();
   const Status s = c->getFunction(get, function, {milliseconds(30)});
@@ -315,22 +324,14 @@ TEST_P(EndToEnd, EightConcurrentClients) {
 TEST_P(EndToEnd, SigtermDrainsInFlightRequests) {
   startServer({"--interpreter-only", "--set", "service.batch_threads=1"});
   auto c = connectTo(GetParam());
-  rpc::LoadModelRequest load;
-  load.urdf = readFile(sourceDir() / "examples/robots/humanoid.urdf");
-  load.floating_base = true;
-  rpc::LoadModelReply model;
-  ASSERT_TRUE(c->loadModel(load, model).ok());
-  rpc::GetFunctionRequest get;
-  get.model_id = model.model_id;
-  get.spec_json = R"({"function": "aba", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", "tau"]}]})";
-  get.wait = true;
+  rpc::GetFunctionRequest get = humanoidAbaJacobian(*c);
   rpc::GetFunctionReply function;
   ASSERT_TRUE(c->getFunction(get, function).ok());
 
   // Four interpreted humanoid ABA-Jacobian batches (~0.1 s each on one thread; two
   // request threads): running and queued when SIGTERM comes 40 ms in. Every one is
   // answered before robodiffd exits.
-  const Model humanoid = loadUrdfString(load.urdf, RootJoint::FreeFlyer);
+  const Model humanoid = loadUrdfString(readFile(sourceDir() / "examples/robots/humanoid.urdf"), RootJoint::FreeFlyer);
   const FunctionSpec spec = parseFunctionSpec(get.spec_json);
   const std::vector<Eigen::VectorXd> state = randomRuntimeInputs(humanoid, spec, 4);
   constexpr int kKnots = 700;

@@ -230,42 +230,24 @@ void DdsServer::Core::runPosted(const robodiff_wire_Request& sample, const Reque
                                           " ms in robodiffd's request queue, past its deadline; not started"});
     }
     const auto& body = sample.body._u;
+    // Decode, call the service, send its reply (or its error).
+    auto serve = [&](const auto& wire, auto request, auto reply, auto method) {
+      dds_codec::fromWire(wire, request);
+      const Status status = (service.*method)(ctx, request, reply);
+      return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
+    };
     switch (info.method) {
-      case rpc::Method::LoadModel: {
-        rpc::LoadModelRequest request;
-        dds_codec::fromWire(body.load_model, request);
-        rpc::LoadModelReply reply;
-        Status status = service.loadModel(ctx, request, reply);
-        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
-      }
-      case rpc::Method::GetFunction: {
-        rpc::GetFunctionRequest request;
-        dds_codec::fromWire(body.get_function, request);
-        rpc::GetFunctionReply reply;
-        Status status = service.getFunction(ctx, request, reply);
-        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
-      }
-      case rpc::Method::ListFunctions: {
-        rpc::ListFunctionsRequest request;
-        dds_codec::fromWire(body.list_functions, request);
-        rpc::ListFunctionsReply reply;
-        Status status = service.listFunctions(ctx, request, reply);
-        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
-      }
-      case rpc::Method::Health: {
-        rpc::HealthRequest request;
-        dds_codec::fromWire(body.health, request);
-        rpc::HealthReply reply;
-        Status status = service.health(ctx, request, reply);
-        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
-      }
-      case rpc::Method::Release: {
-        rpc::ReleaseRequest request;
-        dds_codec::fromWire(body.release, request);
-        rpc::ReleaseReply reply;
-        Status status = service.release(ctx, request, reply);
-        return status.ok() ? replies.sendBody(info, reply) : replies.sendError(info, status);
-      }
+      case rpc::Method::LoadModel:
+        return serve(body.load_model, rpc::LoadModelRequest{}, rpc::LoadModelReply{}, &ServiceApi::loadModel);
+      case rpc::Method::GetFunction:
+        return serve(body.get_function, rpc::GetFunctionRequest{}, rpc::GetFunctionReply{}, &ServiceApi::getFunction);
+      case rpc::Method::ListFunctions:
+        return serve(body.list_functions, rpc::ListFunctionsRequest{}, rpc::ListFunctionsReply{},
+                     &ServiceApi::listFunctions);
+      case rpc::Method::Health:
+        return serve(body.health, rpc::HealthRequest{}, rpc::HealthReply{}, &ServiceApi::health);
+      case rpc::Method::Release:
+        return serve(body.release, rpc::ReleaseRequest{}, rpc::ReleaseReply{}, &ServiceApi::release);
       case rpc::Method::EvaluateBatch: return evaluateBatch(info, body.evaluate_batch);
       case rpc::Method::Evaluate: break;  // inline, never posted
     }
