@@ -87,6 +87,24 @@ TEST(ClientHotPath, LocalEvaluateNeverAllocates) {
   EXPECT_TRUE(ref.matches(out));
 }
 
+TEST(ClientHotPath, ShmEvaluateNeverAllocatesAfterWarmUp) {
+  SharedServer& shared = SharedServer::get();
+  Client shm(shared.server().options(Mode::Shm));
+  const client::Function f = shm.function(shm.loadModel(arm7Text()), kRneaJacobianSpec);
+  ASSERT_EQ(f.mode(), Mode::Shm);
+  const RneaReference ref = RneaReference::at(shared.model(), 10);
+  std::vector<double> out(f.outputCount());
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(f.evaluate(spanOf(ref.inputs), out).ok());  // warm-up
+
+  int failures = 0;
+  counting = true;
+  for (int i = 0; i < 2000; ++i) failures += f.evaluate(spanOf(ref.inputs), out).ok() ? 0 : 1;
+  counting = false;
+  EXPECT_EQ(allocations.exchange(0), 0u) << "allocations in 2,000 shm evaluate calls (this thread)";
+  EXPECT_EQ(failures, 0);
+  EXPECT_TRUE(ref.matches(out));
+}
+
 TEST(ClientHotPath, LocalOverheadOverTheCompiledFunction) {
   SharedServer& shared = SharedServer::get();
   Client local(shared.server().options(Mode::Local));

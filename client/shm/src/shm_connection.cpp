@@ -9,7 +9,7 @@
 #include <mutex>
 #include <semaphore>
 #include <thread>
-#include <unordered_map>
+#include <vector>
 
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/rpc_header.hpp"
@@ -62,7 +62,23 @@ struct ShmConnection::Impl {
   };
   std::mutex pending_mutex;
   std::condition_variable pending_cv;
-  std::unordered_map<std::uint64_t, Pending*> pending;
+  // A short list (at most max_in_flight entries) in capacity reserved at connect: adding
+  // and removing never allocates, so a call does not either.
+  std::vector<std::pair<std::uint64_t, Pending*>> pending;
+
+  Pending* findPending(std::uint64_t id) {  // pending_mutex held
+    for (auto& [key, p] : pending)
+      if (key == id) return p;
+    return nullptr;
+  }
+  void erasePending(std::uint64_t id) {  // pending_mutex held
+    for (std::size_t i = 0; i < pending.size(); ++i)
+      if (pending[i].first == id) {
+        pending[i] = pending.back();
+        pending.pop_back();
+        return;
+      }
+  }
 
   // iceoryx lets a client hold at most 4 loaned, unsent requests (bodies are written
   // outside the port mutex, so more callers could be between loan and send).
@@ -139,10 +155,10 @@ struct ShmConnection::Impl {
     const auto id = static_cast<std::uint64_t>(iox::popo::ResponseHeader::fromPayload(response)->getSequenceId());
     {
       std::lock_guard lock(pending_mutex);
-      auto it = pending.find(id);
-      if (it != pending.end() && !it->second->done) {
-        it->second->response = response;
-        it->second->done = true;
+      Pending* p = findPending(id);
+      if (p != nullptr && !p->done) {
+        p->response = response;
+        p->done = true;
         pending_cv.notify_all();
         return;
       }
@@ -178,7 +194,9 @@ struct ShmConnection::Impl {
       }
     } slot_guard{*this};
 
-    rpc::RequestHeader header;
+    // Per thread and reused: assigning the same ids again keeps their strings' capacity,
+    // so a call allocates nothing after this thread's first.
+    thread_local rpc::RequestHeader header;
     header.schema_version = options.schema_version;
     header.client_id = client_id;
     header.correlation_id = next_correlation.fetch_add(1);
@@ -212,11 +230,11 @@ struct ShmConnection::Impl {
     Pending waiting;
     {
       std::lock_guard lock(pending_mutex);
-      pending.emplace(header.correlation_id, &waiting);
+      pending.emplace_back(header.correlation_id, &waiting);
     }
     auto forget = [&] {
       std::lock_guard lock(pending_mutex);
-      pending.erase(header.correlation_id);
+      erasePending(header.correlation_id);
     };
     bool sent;
     {
@@ -235,7 +253,7 @@ struct ShmConnection::Impl {
     {
       std::unique_lock lock(pending_mutex);
       pending_cv.wait_until(lock, deadline, [&] { return waiting.done.load(); });
-      pending.erase(header.correlation_id);
+      erasePending(header.correlation_id);
       if (!waiting.done)
         return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply from the robodiff server within " +
                                                   milliseconds(timeout)};
@@ -244,7 +262,7 @@ struct ShmConnection::Impl {
 
     const void* response = waiting.response;
     const auto response_size = iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize();
-    shm::ReplyView view;
+    thread_local shm::ReplyView view;  // reused, as the request header above
     Status result = shm::parseReply(response, response_size, view);
     if (!result.ok()) {
       result = {StatusCode::Internal, "the server's reply is unreadable: " + result.message};
@@ -359,6 +377,7 @@ std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options, S
   auto impl = std::make_unique<ShmConnection::Impl>();
   impl->options = options;
   impl->options.max_in_flight = std::clamp<std::uint32_t>(options.max_in_flight, 1, iox::MAX_RESPONSE_QUEUE_CAPACITY);
+  impl->pending.reserve(impl->options.max_in_flight);
   impl->client_id = options.client_id;
   if (impl->client_id.empty()) {
     impl->client_id = defaultClientId();  // "<host>:<pid>:<random>": keep the unique end
