@@ -183,6 +183,10 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
     }
   }
   f->blocks = runtime::FunctionLayout::fromReply(f->layout);
+  for (const rpc::OutputBlock& b : f->layout.outputs) {
+    f->csr_rows.emplace_back(b.row_offsets.begin(), b.row_offsets.end());
+    f->csr_cols.emplace_back(b.col_indices.begin(), b.col_indices.end());
+  }
   {
     std::lock_guard lock(c.registry_mutex);
     c.functions[f->id] = Impl::FunctionRecord{model.id, spec_json};

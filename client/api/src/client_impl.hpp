@@ -82,6 +82,8 @@ struct Function::Impl {
   std::string id, model_id, spec_json;
   rpc::GetFunctionReply layout;
   runtime::FunctionLayout blocks;  // the layout's blocks with their offsets (sizes, checks)
+  // Each output block's CSR pattern in Eigen's index type (empty for dense blocks).
+  std::vector<std::vector<int>> csr_rows, csr_cols;
   FunctionSpec spec;
 
   // Local evaluation: set once (then never changed) when the library is loaded.

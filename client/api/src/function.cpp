@@ -101,6 +101,43 @@ std::future<Status> Function::evaluateAsync(std::span<const double> inputs, std:
   return std::async(std::launch::async, [self, inputs, outputs] { return self.evaluate(inputs, outputs); });
 }
 
+namespace {
+
+// The block's values in `outputs`, or ClientError naming what does not fit.
+const double* blockValues(const Function::Impl& f, std::size_t block, std::span<const double> outputs,
+                          rpc::OutputLayout want) {
+  auto fail = [&](const std::string& what) -> const double* {
+    throw ClientError({StatusCode::InvalidArgument, "function " + f.id + ": " + what});
+  };
+  if (block >= f.layout.outputs.size())
+    return fail("output block " + std::to_string(block) + " does not exist (it has " +
+                std::to_string(f.layout.outputs.size()) + ")");
+  const rpc::OutputBlock& b = f.layout.outputs[block];
+  if (b.layout != want)
+    return fail("output block " + b.name + " is " +
+                (b.layout == rpc::OutputLayout::SparseCsr ? "sparse: use sparseBlock" : "dense: use denseBlock"));
+  if (outputs.size() < f.blocks.output_count)
+    return fail("outputs hold " + std::to_string(outputs.size()) + " doubles, one knot has " +
+                std::to_string(f.blocks.output_count));
+  return outputs.data() + f.blocks.output_offsets[block];
+}
+
+}  // namespace
+
+Function::SparseBlock Function::sparseBlock(std::size_t block, std::span<const double> outputs) const {
+  const Impl& f = checked(impl_);
+  const double* values = blockValues(f, block, outputs, rpc::OutputLayout::SparseCsr);
+  const rpc::OutputBlock& b = f.layout.outputs[block];
+  return SparseBlock(b.rows, b.cols, b.nnz, f.csr_rows[block].data(), f.csr_cols[block].data(), values);
+}
+
+Function::DenseBlock Function::denseBlock(std::size_t block, std::span<const double> outputs) const {
+  const Impl& f = checked(impl_);
+  const double* values = blockValues(f, block, outputs, rpc::OutputLayout::DenseRowMajor);
+  const rpc::OutputBlock& b = f.layout.outputs[block];
+  return DenseBlock(values, b.rows, b.cols);
+}
+
 Outputs Function::operator()(const std::vector<Eigen::VectorXd>& inputs) const {
   const Impl& f = checked(impl_);
   if (inputs.size() != f.layout.inputs.size()) {

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include "robodiff/client/connection.hpp"
 #include "robodiff/schema/messages.hpp"
@@ -110,6 +111,16 @@ class Function {
   // The same, returning at once; the spans must stay valid until the future is ready.
   // Runs on a std::async thread: allocates (not for the hot path).
   std::future<Status> evaluateAsync(std::span<const double> inputs, std::span<double> outputs) const;
+
+  // One output block of `outputs` (a knot's concatenated outputs, as evaluate wrote them)
+  // as an Eigen view, no copy: the values stay in `outputs`. sparseBlock gives a CSR
+  // block as a row-major sparse matrix (its pattern is the function's, fixed); denseBlock
+  // a dense one, row-major. Throw ClientError (INVALID_ARGUMENT) for a block of the other
+  // layout, a block index out of range, or outputs too short.
+  using SparseBlock = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>>;
+  using DenseBlock = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+  SparseBlock sparseBlock(std::size_t block, std::span<const double> outputs) const;
+  DenseBlock denseBlock(std::size_t block, std::span<const double> outputs) const;
 
   // Convenience (allocates): one Eigen vector per input block in, dense matrices out.
   // Throws ClientError.
