@@ -31,6 +31,8 @@
 #include <string>
 #include <thread>
 
+#include <gtest/gtest.h>
+
 #include "robodiff/schema/shm_runtime.hpp"
 #include "support/test_paths.hpp"
 
@@ -108,11 +110,29 @@ class RoudiProcess {
   std::filesystem::path log_;
 };
 
-// One RouDi for the rest of this test process (stopped at exit by the process that
-// started it).
+// One RouDi for the rest of this test process, stopped when the tests are done (by the
+// process that started it).
+inline RoudiProcess*& sharedRoudiIfMade() {  // null until sharedRoudi() is first called
+  static RoudiProcess* made = nullptr;
+  return made;
+}
 inline RoudiProcess& sharedRoudi() {
   static RoudiProcess roudi;
+  sharedRoudiIfMade() = &roudi;
   return roudi;
 }
+
+// Stops the shared RouDi after the last test, before the process exits: this process's
+// iceoryx runtime unregisters at exit and waits for RouDi's answer without a timeout, so
+// a RouDi still there but hung (a killed process left a port's mutex locked, iceoryx 2.0)
+// would hang the test process; a RouDi already gone refuses at once.
+class StopSharedRoudiAtEnd : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    if (RoudiProcess* roudi = sharedRoudiIfMade()) roudi->stop();
+  }
+};
+inline const bool kStopSharedRoudiAtEndRegistered =
+    (::testing::AddGlobalTestEnvironment(new StopSharedRoudiAtEnd), true);
 
 }  // namespace robodiff::testing
