@@ -2,6 +2,7 @@
 // worker processes and SQLite cache, real clients. Every method; malformed requests get
 // the right status and the server keeps serving; deadlines; a killed client; a killed and
 // restarted server; 8 concurrent clients; SIGTERM drains.
+#include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -239,20 +240,43 @@ TEST_P(EndToEnd, DeadlineThatExpires) {
 }
 
 TEST_P(EndToEnd, ClientKilledMidRequest) {
-  startServer();
-  {
-    auto c = connectTo(GetParam());
-    loadRneaJacobian(*c);
-  }
+  // The child below is a fork of this process; Cyclone DDS does not work in a forked copy
+  // (it needs exec: tests/dds/dds_process_test.cpp kills a DDS client process that way).
+  if (GetParam() == "dds") GTEST_SKIP() << "a killed DDS client process: see DdsProcess in tests/dds";
+  // An interpreted batch of 20,000 knots on one thread: ~0.1 s of work for the server.
+  startServer({"--interpreter-only", "--set", "service.batch_threads=1"});
+  // Forked before this process touches iceoryx, so that the child registers with RouDi as
+  // a process of its own (a forked copy of a registered runtime would not be one).
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
   const pid_t child = fork();
   if (child == 0) {
-    // A client that asks for a big batch and is killed before the answer.
+    // A client that sends a long batch and is killed while it waits for the answer.
+    close(ready[0]);
     auto c = connectTo(GetParam());
+    rpc::HealthReply h;  // a fresh connection may need a moment to see the server
+    for (int i = 0; i < 100 && !c->health({}, h).ok(); ++i) std::this_thread::sleep_for(milliseconds(50));
     const std::string id = loadRneaJacobian(*c);
     std::vector<double> ins(20000 * 21, 0.2), outs(20000 * 154);
-    for (;;) c->evaluateBatch(id, 20000, ins, outs);
+    const char byte = 1;
+    if (write(ready[1], &byte, 1) != 1) _exit(1);
+    c->evaluateBatch(id, 20000, ins, outs);
+    _exit(0);
   }
-  std::this_thread::sleep_for(milliseconds(1500));
+  close(ready[1]);
+  pollfd wait_ready{ready[0], POLLIN, 0};
+  char byte = 0;
+  const bool child_ready = poll(&wait_ready, 1, 30000) == 1 && read(ready[0], &byte, 1) == 1;
+  close(ready[0]);
+  if (!child_ready) {
+    ::kill(child, SIGKILL);
+    waitpid(child, nullptr, 0);
+    FAIL() << "the child client did not get as far as its request within 30 s";
+  }
+  // Killed while waiting for its reply: its request sent (~ms), the server still at work.
+  // (Not while inside an iceoryx call: killed holding one of its shared-memory mutexes, a
+  // process leaves RouDi hung, an iceoryx 2.0 limit.)
+  std::this_thread::sleep_for(milliseconds(40));
   ::kill(child, SIGKILL);
   waitpid(child, nullptr, 0);
 
@@ -260,8 +284,11 @@ TEST_P(EndToEnd, ClientKilledMidRequest) {
   const std::string id = loadRneaJacobian(*c);
   const RneaReference ref = RneaReference::at(model_, 5);
   EXPECT_TRUE(ref.matches(evaluate(*c, id, ref.inputs)));
+  // The killed client's batch was carried out to the end (and counted) all the same.
   rpc::HealthReply health;
-  ASSERT_TRUE(c->health({}, health).ok());
+  EXPECT_TRUE(waitFor([&] {
+    return c->health({}, health).ok() && health.methods[static_cast<int>(rpc::Method::EvaluateBatch)].requests >= 1;
+  })) << "the killed client's batch never completed on the server";
   EXPECT_EQ(health.state, rpc::ServingState::Serving);
 }
 

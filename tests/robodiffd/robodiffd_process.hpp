@@ -24,8 +24,12 @@ namespace robodiff::testing {
 
 inline std::filesystem::path robodiffdPath() { return ROBODIFFD_PATH; }
 
-// A DDS domain of this test process's own (ctest runs several at once).
-inline int testDomain() { return 1 + static_cast<int>(getpid() % 200); }
+// A DDS domain of this test process's own (ctest runs several at once); fixed at the
+// first call, so that a forked child uses its parent's.
+inline int testDomain() {
+  static const int domain = 1 + static_cast<int>(getpid() % 200);
+  return domain;
+}
 
 // Points Cyclone DDS at the loopback configuration of deploy/ for this process and its
 // children.
