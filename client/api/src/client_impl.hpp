@@ -13,6 +13,7 @@
 #include <string>
 
 #include "robodiff/runtime/function_layout.hpp"
+#include "async_executor.hpp"
 #include "local_evaluator.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/client/client.hpp"
@@ -70,6 +71,16 @@ struct Client::Impl {
   // LoadModel + GetFunction(wait) for every model and function of this client, unless
   // another thread did so since `seen_generation`.
   Status reregister(std::uint64_t seen_generation);
+
+  // evaluateAsync's threads, started by the first asynchronous call.
+  std::once_flag async_once;
+  std::unique_ptr<detail::AsyncExecutor> async;
+  detail::AsyncExecutor& asyncExecutor() {
+    std::call_once(async_once, [&] {
+      async = std::make_unique<detail::AsyncExecutor>(options.async_threads, options.async_queue);
+    });
+    return *async;
+  }
   // The server's summary of a function (ListFunctions), if it answers.
   std::optional<rpc::FunctionSummary> summary(const std::string& function_id);
 };

@@ -95,10 +95,13 @@ Status Function::evaluateBatch(std::size_t knots, std::span<const double> inputs
 }
 
 std::future<Status> Function::evaluateAsync(std::span<const double> inputs, std::span<double> outputs) const {
-  // std::async: a thread per call (allocates; not for the hot path). The Function is
-  // copied into the task, so it outlives this handle if need be.
-  const Function self = *this;
-  return std::async(std::launch::async, [self, inputs, outputs] { return self.evaluate(inputs, outputs); });
+  if (!impl_) {
+    std::promise<Status> empty;
+    empty.set_value(kEmpty);
+    return empty.get_future();
+  }
+  // The Function is copied into the call, so it outlives this handle if need be.
+  return impl_->client->asyncExecutor().submit(*this, inputs, outputs);
 }
 
 namespace {

@@ -66,6 +66,8 @@ struct ClientOptions {
   std::filesystem::path cache_dir;  // Local mode; empty: the default cache (cache::defaultCacheDir)
   std::chrono::nanoseconds timeout = std::chrono::seconds(30);  // per call unless CallOptions says
   std::string client_id;            // empty: defaultClientId()
+  std::size_t async_threads = 2;    // Function::evaluateAsync's threads
+  std::size_t async_queue = 64;     // evaluateAsync calls queued or running at most
 };
 
 class ClientError : public std::runtime_error {
@@ -109,7 +111,9 @@ class Function {
   Status evaluateBatch(std::size_t knots, std::span<const double> inputs, std::span<double> outputs,
                        std::chrono::nanoseconds timeout = std::chrono::nanoseconds(0)) const;
   // The same, returning at once; the spans must stay valid until the future is ready.
-  // Runs on a std::async thread: allocates (not for the hot path).
+  // Runs on the Client's async threads (ClientOptions::async_threads, started by the
+  // first call); allocates nothing after that thread's first call on this Function. More
+  // than ClientOptions::async_queue calls pending: the future holds RESOURCE_EXHAUSTED.
   std::future<Status> evaluateAsync(std::span<const double> inputs, std::span<double> outputs) const;
 
   // One output block of `outputs` (a knot's concatenated outputs, as evaluate wrote them)
