@@ -174,14 +174,16 @@ Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume con
                                            endpoints_->writerTopic() + " just after answering; retry when it is back"};
   }
 
+  // The wire header is filled in directly (an rpc::RequestHeader would copy the client id
+  // into a std::string on every call).
   dds_codec::WireRequest request;
-  rpc::RequestHeader header;
-  header.schema_version = options_.connection.schema_version;
-  header.client_id = client_id_;
+  robodiff_wire_RequestHeader& header = request->header;
+  header.schema_version.major = options_.connection.schema_version.major;
+  header.schema_version.minor = options_.connection.schema_version.minor;
+  header.client_id = dds_codec::dupString(client_id_);
   header.correlation_id = id;
   header.deadline_budget_ns = static_cast<std::uint64_t>(std::chrono::nanoseconds(timeout).count());
-  header.server_instance_id = options_.connection.server_instance_id;
-  dds_codec::toWire(header, request->header);
+  header.server_instance_id = dds_codec::dupString(options_.connection.server_instance_id);
   dds_sequence_double* borrowed = encode(request->body);
   const dds_return_t rc = dds_write(endpoints_->writer(), &request.get());
   if (borrowed) dds_codec::detachDoubles(*borrowed);

@@ -1,36 +1,51 @@
 // The pending-call table of a DDS connection: correlation id -> waiting caller.
 #include "pending_calls.hpp"
 
+#include <algorithm>
+
 #include "robodiff/schema/dds_codec.hpp"
 
 namespace robodiff::client::dds_detail {
+
+std::vector<PendingCalls::Entry>::iterator PendingCalls::find(std::uint64_t id) {
+  return std::find_if(calls_.begin(), calls_.end(), [id](const Entry& e) { return e.first == id; });
+}
+
+void PendingCalls::erase(std::vector<Entry>::iterator it) {
+  if (it == calls_.end()) return;
+  *it = calls_.back();
+  calls_.pop_back();
+}
 
 bool PendingCalls::add(std::uint64_t id, PendingCall& call) {
   std::lock_guard lock(mutex_);
   if (!open_) return false;
   call.done = false;
-  calls_[id] = &call;
+  if (const auto it = find(id); it != calls_.end())
+    it->second = &call;
+  else
+    calls_.emplace_back(id, &call);
   return true;
 }
 
 void PendingCalls::remove(std::uint64_t id) {
   std::lock_guard lock(mutex_);
-  calls_.erase(id);
+  erase(find(id));
 }
 
 std::optional<Status> PendingCalls::wait(std::uint64_t id, PendingCall& call, Clock::time_point deadline) {
   std::unique_lock lock(mutex_);
   const bool done = call.cv.wait_until(lock, deadline, [&] { return call.done; });
   if (!done) {
-    calls_.erase(id);  // a reply arriving later finds nothing and is dropped
+    erase(find(id));  // a reply arriving later finds nothing and is dropped
     return std::nullopt;
   }
   return call.status;
 }
 
-void PendingCalls::finish(std::unordered_map<std::uint64_t, PendingCall*>::iterator it, Status status) {
+void PendingCalls::finish(std::vector<Entry>::iterator it, Status status) {
   PendingCall& call = *it->second;
-  calls_.erase(it);
+  erase(it);
   call.status = std::move(status);
   call.done = true;
   call.cv.notify_one();
@@ -38,7 +53,7 @@ void PendingCalls::finish(std::unordered_map<std::uint64_t, PendingCall*>::itera
 
 void PendingCalls::deliver(const robodiff_wire_Reply& reply) {
   std::lock_guard lock(mutex_);
-  const auto it = calls_.find(reply.header.correlation_id);
+  const auto it = find(reply.header.correlation_id);
   if (it == calls_.end()) return;
   PendingCall& call = *it->second;
   const auto method = dds_codec::methodFromWire(reply.body._d);
@@ -62,7 +77,7 @@ void PendingCalls::close(StatusCode code, const std::string& message) {
   std::lock_guard lock(mutex_);
   open_ = false;
   while (!calls_.empty()) {
-    const auto it = calls_.begin();
+    const auto it = calls_.end() - 1;
     finish(it, {code, message + " (waiting for the reply to " + rpc::toString(it->second->method) + ")"});
   }
 }

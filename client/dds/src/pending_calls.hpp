@@ -12,7 +12,8 @@
 #include <mutex>
 #include <optional>
 #include <string>
-#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "robodiff.h"
 #include "robodiff/schema/messages.hpp"
@@ -34,6 +35,8 @@ struct PendingCall {
 
 class PendingCalls {
  public:
+  PendingCalls() { calls_.reserve(64); }  // no allocation per call until 64 are pending at once
+
   // Registers a call; false while closed (no server matched): send nothing then.
   bool add(std::uint64_t id, PendingCall& call);
   void remove(std::uint64_t id);
@@ -51,11 +54,16 @@ class PendingCalls {
   std::size_t size() const;
 
  private:
-  void finish(std::unordered_map<std::uint64_t, PendingCall*>::iterator it, Status status);
+  using Entry = std::pair<std::uint64_t, PendingCall*>;
+  std::vector<Entry>::iterator find(std::uint64_t id);
+  void erase(std::vector<Entry>::iterator it);  // swaps with the last entry
+  void finish(std::vector<Entry>::iterator it, Status status);
 
   mutable std::mutex mutex_;
   bool open_ = false;
-  std::unordered_map<std::uint64_t, PendingCall*> calls_;
+  // Unordered (correlation id, call): a few calls pending at a time, so a linear search
+  // beats hashing, and the reserved vector never allocates per call as map nodes would.
+  std::vector<Entry> calls_;
 };
 
 }  // namespace robodiff::client::dds_detail
