@@ -64,7 +64,7 @@ void addFlags(CLI::App& app, Flags& f) {
   app.add_option("--dds-domain", f.dds_domain, "DDS domain id (dds.domain)");
   app.add_flag("--no-dds", f.no_dds, "Do not serve over DDS (dds.enabled = false)");
   app.add_flag("--no-iceoryx", f.no_iceoryx, "Do not serve over iceoryx (iceoryx.enabled = false)");
-  app.add_option("--roudi", f.roudi, "auto | external | embedded (iceoryx.roudi)");
+  app.add_option("--roudi", f.roudi, "auto | external | embedded | detached (iceoryx.roudi)");
   app.add_flag("--interpreter-only", f.interpreter_only, "Never compile (build.compile = false)");
   app.add_option("--log-level", f.log_level, "debug | info | warn | error (log.level)");
   app.add_option("--log-format", f.log_format, "json | text (log.format)");

@@ -139,8 +139,8 @@ const std::vector<Setting>& settings() {
        [](const ServerConfig& c) { return quoted(c.shm.service); }},
       {"iceoryx.roudi",
        [](ServerConfig& c, const std::string& v) {
-         if (v != "auto" && v != "external" && v != "embedded")
-           throw std::invalid_argument("is not one of auto, external, embedded");
+         if (v != "auto" && v != "external" && v != "embedded" && v != "detached")
+           throw std::invalid_argument("is not one of auto, external, embedded, detached");
          c.shm.roudi = v;
        },
        [](const ServerConfig& c) { return c.shm.roudi; }},

@@ -62,45 +62,109 @@ class OwnedRoudi final : public RoudiHandle {
   std::filesystem::path config_;
 };
 
-std::unique_ptr<RoudiHandle> startRoudi(Logger& log) {
-  const auto config = std::filesystem::temp_directory_path() / ("robodiff-roudi-" + std::to_string(::getpid()) + ".toml");
-  {
-    std::ofstream out(config);
-    out << roudiToml();
-    if (!out) throw std::runtime_error("cannot write the RouDi configuration " + config.string());
+std::filesystem::path writeRoudiConfig(const char* kind) {
+  const auto config = std::filesystem::temp_directory_path() /
+                      ("robodiff-roudi-" + std::string(kind) + std::to_string(::getpid()) + ".toml");
+  std::ofstream out(config);
+  out << roudiToml();
+  if (!out) throw std::runtime_error("cannot write the RouDi configuration " + config.string());
+  return config;
+}
+
+// In a child about to exec iox-roudi: robodiffd blocks SIGINT/SIGTERM to sigwait for
+// them, and a blocked mask survives exec, so unblock everything (RouDi's own handlers
+// and the death signal must work).
+void resetSignalsForExec() {
+  sigset_t none;
+  ::sigemptyset(&none);
+  ::sigprocmask(SIG_SETMASK, &none, nullptr);
+  ::signal(SIGINT, SIG_DFL);
+  ::signal(SIGTERM, SIG_DFL);
+  ::signal(SIGPIPE, SIG_DFL);
+}
+
+[[noreturn]] void execRoudi(const std::filesystem::path& config) {
+  ::execlp("iox-roudi", "iox-roudi", "-c", config.c_str(), "-l", "warning", static_cast<char*>(nullptr));
+  std::fprintf(stderr, "robodiffd: cannot run iox-roudi (package iceoryx): %s\n", std::strerror(errno));
+  ::_exit(127);
+}
+
+// Waits up to 3 s for a started RouDi to accept runtimes; `alive` says whether it still runs.
+template <class Alive>
+void waitForRoudi(Alive alive) {
+  const auto until = std::chrono::steady_clock::now() + 3s;
+  while (!shm::roudiRunning()) {
+    if (!alive()) throw std::runtime_error("iox-roudi exited at once (is package iceoryx installed? is another RouDi starting?)");
+    if (std::chrono::steady_clock::now() > until)
+      throw std::runtime_error("the RouDi started by robodiffd did not open " + shm::roudiSocketPath() + " within 3 s");
+    std::this_thread::sleep_for(2ms);
   }
+}
+
+std::unique_ptr<RoudiHandle> startOwnedRoudi(Logger& log) {
+  const auto config = writeRoudiConfig("");
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error("fork for iox-roudi failed");
   if (pid == 0) {
-    // robodiffd blocks SIGINT/SIGTERM to sigwait for them, and a blocked mask survives
-    // exec: unblock everything so RouDi's own handlers (and the death signal) work.
-    sigset_t none;
-    ::sigemptyset(&none);
-    ::sigprocmask(SIG_SETMASK, &none, nullptr);
-    ::signal(SIGINT, SIG_DFL);
-    ::signal(SIGTERM, SIG_DFL);
+    resetSignalsForExec();
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (::getppid() != parent) ::_exit(1);
     const int devnull = ::open("/dev/null", O_WRONLY);
     if (devnull >= 0) ::dup2(devnull, STDOUT_FILENO);  // RouDi's banner; warnings still reach stderr
     ::setpgid(0, 0);  // a terminal's Ctrl-C goes to robodiffd, which stops RouDi last
-    ::execlp("iox-roudi", "iox-roudi", "-c", config.c_str(), "-l", "warning", static_cast<char*>(nullptr));
-    std::fprintf(stderr, "robodiffd: cannot run iox-roudi (package iceoryx): %s\n", std::strerror(errno));
-    ::_exit(127);
+    execRoudi(config);
   }
   auto roudi = std::make_unique<OwnedRoudi>(pid, config);
-  const auto until = std::chrono::steady_clock::now() + 3s;
-  while (!shm::roudiRunning()) {
-    if (!roudi->alive())
-      throw std::runtime_error("iox-roudi exited at once (is package iceoryx installed? is another RouDi starting?)");
-    if (std::chrono::steady_clock::now() > until)
-      throw std::runtime_error("the RouDi started by robodiffd did not open " + shm::roudiSocketPath() + " within 3 s");
-    std::this_thread::sleep_for(2ms);
-  }
+  waitForRoudi([&] { return roudi->alive(); });
   log.info("roudi_started", {{"pid", static_cast<long long>(pid)}, {"config", config.string()},
                              {"max_chunk_payload", static_cast<std::uint64_t>(shm::maxChunkPayload())}});
   return roudi;
+}
+
+// A RouDi left running when this process exits: started through a double fork in a
+// session of its own (no controlling terminal, not this process's child, no death
+// signal), its output in a log file, so that it serves the next robodiffd too and the
+// shm clients registered with it survive a robodiffd restart.
+std::unique_ptr<RoudiHandle> startDetachedRoudi(Logger& log) {
+  const auto config = writeRoudiConfig("detached-");
+  auto log_path = config;
+  log_path.replace_extension(".log");
+  int pid_pipe[2];
+  if (::pipe(pid_pipe) != 0) throw std::runtime_error("pipe for iox-roudi failed");
+  const pid_t middle = ::fork();
+  if (middle < 0) throw std::runtime_error("fork for iox-roudi failed");
+  if (middle == 0) {
+    ::close(pid_pipe[0]);
+    resetSignalsForExec();
+    ::setsid();
+    const pid_t roudi = ::fork();
+    if (roudi == 0) {
+      ::close(pid_pipe[1]);
+      const int devnull = ::open("/dev/null", O_RDWR);
+      const int out = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
+      if (devnull >= 0) ::dup2(devnull, STDIN_FILENO);
+      if (out >= 0) {
+        ::dup2(out, STDOUT_FILENO);
+        ::dup2(out, STDERR_FILENO);
+      }
+      execRoudi(config);
+    }
+    const ssize_t ignored = ::write(pid_pipe[1], &roudi, sizeof roudi);
+    (void)ignored;
+    ::_exit(roudi > 0 ? 0 : 1);
+  }
+  ::close(pid_pipe[1]);
+  pid_t pid = -1;
+  const ssize_t got = ::read(pid_pipe[0], &pid, sizeof pid);
+  ::close(pid_pipe[0]);
+  ::waitpid(middle, nullptr, 0);
+  if (got != static_cast<ssize_t>(sizeof pid) || pid <= 0) throw std::runtime_error("fork for iox-roudi failed");
+  waitForRoudi([&] { return ::kill(pid, 0) == 0; });
+  log.info("roudi_started_detached",
+           {{"pid", static_cast<long long>(pid)}, {"config", config.string()}, {"log", log_path.string()},
+            {"note", "left running when robodiffd exits; stop it with kill " + std::to_string(pid)}});
+  return std::make_unique<ExternalRoudi>();
 }
 
 }  // namespace
@@ -109,7 +173,8 @@ RoudiMode parseRoudiMode(std::string_view text) {
   if (text == "auto") return RoudiMode::Auto;
   if (text == "external") return RoudiMode::External;
   if (text == "embedded") return RoudiMode::Embedded;
-  throw std::invalid_argument("RouDi mode '" + std::string(text) + "' is not one of auto, external, embedded");
+  if (text == "detached") return RoudiMode::Detached;
+  throw std::invalid_argument("RouDi mode '" + std::string(text) + "' is not one of auto, external, embedded, detached");
 }
 
 std::unique_ptr<RoudiHandle> ensureRoudi(RoudiMode mode, Logger& log) {
@@ -124,7 +189,8 @@ std::unique_ptr<RoudiHandle> ensureRoudi(RoudiMode mode, Logger& log) {
   if (mode == RoudiMode::External)
     throw std::runtime_error("no RouDi is running (nothing answers on " + shm::roudiSocketPath() +
                              "): start iox-roudi -c deploy/roudi.toml, or use roudi = auto to start one");
-  return startRoudi(log);
+  if (mode == RoudiMode::Detached) return startDetachedRoudi(log);
+  return startOwnedRoudi(log);
 }
 
 }  // namespace robodiff::server

@@ -24,8 +24,12 @@ enum class RoudiMode {
   Auto,      // the running RouDi, else an embedded one
   External,  // the running RouDi; none is an error
   Embedded,  // always start our own (an error when one is already running: one RouDi per host)
+  Detached,  // the running RouDi, else start one that is left running when this process
+             // exits (its own session; a restarted robodiffd uses it again, so the shm
+             // clients registered with it survive the restart; iceoryx 2.0 clients cannot
+             // move to a new RouDi). Stopping it is the operator's (its PID is logged).
 };
-// "auto" | "external" | "embedded"; throws std::invalid_argument naming the value.
+// "auto" | "external" | "embedded" | "detached"; throws std::invalid_argument naming the value.
 RoudiMode parseRoudiMode(std::string_view text);
 
 // Which RouDi this process uses; an owned RouDi lives as long as its handle. Destroy
