@@ -1,0 +1,245 @@
+// `robodiff trajectory`: a spec's function evaluated at every knot of a trajectory file
+// (CSV or JSON) on all cores, its outputs written to a CSV or binary file
+// (batch/trajectory: the formats are described in trajectory_table.hpp and
+// trajectory_output.hpp). Ctrl-C stops the run and leaves no output file.
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "cache_location.hpp"
+#include "commands.hpp"
+#include "function_options.hpp"
+#include "human_units.hpp"
+#include "robodiff/batch/trajectory_error.hpp"
+#include "robodiff/batch/trajectory_evaluation.hpp"
+#include "robodiff/model/urdf_loader.hpp"
+
+namespace robodiff::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitInterrupted = 130;  // as a shell reports a command stopped by SIGINT
+
+struct TrajectoryArgs {
+  RobotArgs robot;
+  std::string spec, data, out, format, backend = "compiled", cache_dir, compiler;
+  unsigned threads = 0;
+  bool json = false;
+};
+
+std::atomic<bool> g_interrupted{false};
+
+extern "C" void onInterrupt(int) { g_interrupted.store(true); }
+
+// SIGINT and SIGTERM set a flag the evaluation polls, for as long as this object lives.
+class InterruptFlag {
+ public:
+  InterruptFlag() {
+    g_interrupted = false;
+    struct sigaction action {};
+    action.sa_handler = onInterrupt;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(SIGINT, &action, &old_int_);
+    ::sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~InterruptFlag() {
+    ::sigaction(SIGINT, &old_int_, nullptr);
+    ::sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+std::string readText(const std::string& path, const char* flag) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(std::string(flag) + " " + path + ": cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return std::move(text).str();
+}
+
+std::string shape(const batch::BlockLayout& block) {
+  std::string text = block.name + " " + std::to_string(block.rows);
+  if (block.cols != 1) text += " x " + std::to_string(block.cols);
+  if (block.sparse) text += " (" + std::to_string(block.size) + " nonzeros)";
+  return text;
+}
+
+std::string fixed(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+
+// "1,234,567" for counts people compare.
+std::string grouped(double x) {
+  const std::string digits = std::to_string(static_cast<std::uint64_t>(x + 0.5));
+  std::string out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+void printSummary(const batch::TrajectoryReport& r, const batch::BatchFunction& f, const FunctionSpec& spec,
+                  const Model& model, unsigned threads) {
+  std::string outputs;
+  for (const batch::BlockLayout& block : f.outputs()) outputs += (outputs.empty() ? "" : ", ") + shape(block);
+  std::cout << "trajectory: " << grouped(static_cast<double>(r.knots)) << " knots of " << toString(spec.function)
+            << " (" << outputs << ") for " << (model.name.empty() ? "the robot" : model.name) << ", "
+            << batch::toString(f.backend()) << ", " << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
+  std::cout << "  read      " << fixed(r.read_seconds, 3) << " s  " << r.data.string() << "\n";
+  std::cout << "  evaluate  " << fixed(r.evaluate_seconds, 3) << " s  " << grouped(r.knots_per_second)
+            << " knots/s\n";
+  std::cout << "  write     " << fixed(r.write_seconds, 3) << " s  " << r.out.string() << " ("
+            << batch::toString(r.format) << ", " << formatBytes(r.bytes) << ")\n";
+  if (!r.ignored_columns.empty()) {
+    std::cout << "  ignored columns:";
+    for (std::size_t i = 0; i < r.ignored_columns.size() && i < 12; ++i) std::cout << " " << r.ignored_columns[i];
+    if (r.ignored_columns.size() > 12) std::cout << " ... (" << r.ignored_columns.size() << " in all)";
+    std::cout << "\n";
+  }
+  if (r.non_finite_knots > 0)
+    std::cerr << "robodiff: warning: " << r.non_finite_knots << " knot" << (r.non_finite_knots == 1 ? " has" : "s have")
+              << " NaN or infinite outputs, the first at " << r.first_non_finite << "\n";
+}
+
+nlohmann::json reportJson(const batch::TrajectoryReport& r, const batch::BatchFunction& f, const FunctionSpec& spec,
+                          const Model& model, unsigned threads) {
+  nlohmann::json outputs = nlohmann::json::array();
+  for (const batch::BlockLayout& block : f.outputs())
+    outputs.push_back({{"name", block.name}, {"rows", block.rows}, {"cols", block.cols},
+                       {"layout", block.sparse ? "csr" : "dense"}, {"size", block.size}});
+  return {{"function", toString(spec.function)},
+          {"model", model.name},
+          {"backend", batch::toString(f.backend())},
+          {"threads", threads},
+          {"data", r.data.string()},
+          {"out", r.out.string()},
+          {"format", batch::toString(r.format)},
+          {"bytes", r.bytes},
+          {"knots", r.knots},
+          {"outputs", outputs},
+          {"read_seconds", r.read_seconds},
+          {"evaluate_seconds", r.evaluate_seconds},
+          {"write_seconds", r.write_seconds},
+          {"knots_per_second", r.knots_per_second},
+          {"ignored_columns", r.ignored_columns},
+          {"non_finite_knots", r.non_finite_knots},
+          {"first_non_finite", r.first_non_finite.empty() ? nlohmann::json() : nlohmann::json(r.first_non_finite)}};
+}
+
+void runTrajectory(const TrajectoryArgs& args) {
+  // Problems on the command line first, before a possibly long build.
+  if (!fs::is_regular_file(args.data)) throw std::runtime_error("--data " + args.data + ": no such file");
+  const std::optional<batch::OutputFormat> format =
+      args.format.empty() ? std::nullopt : std::optional(batch::parseOutputFormat(args.format));
+  if (!format) batch::outputFormatFor(args.out);  // throws naming the path when the extension says nothing
+  const batch::Backend backend = batch::parseBackend(args.backend);
+
+  const std::string urdf_text = readText(args.robot.urdf, "--urdf");
+  const Model model =
+      loadUrdfString(urdf_text, args.robot.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, args.robot.urdf);
+  const FunctionSpec spec = loadFunctionSpec(args.spec);
+
+  const bool terminal = !args.json && ::isatty(STDERR_FILENO);
+  batch::BatchFunctionOptions options;
+  options.backend = backend;
+  options.threads = args.threads;
+  options.compiler = args.compiler;
+  if (backend == batch::Backend::Compiled) options.cache_dir = cacheDirFor(args.cache_dir);
+  options.on_progress = [&](const std::string& what) {
+    if (what == "building" && !args.json)
+      std::cerr << "building " << toString(spec.function) << " for " << model.name << " into the cache "
+                << options.cache_dir.string() << " ...\n";
+  };
+  const batch::BatchFunction function = batch::BatchFunction::open(model, urdf_text, args.robot.floating_base, spec, options);
+
+  InterruptFlag interrupt;
+  batch::TrajectoryJob job;
+  job.data = args.data;
+  job.out = args.out;
+  job.format = format;
+  job.threads = args.threads;
+  job.evaluation.cancelled = [] { return g_interrupted.load(); };
+  if (terminal)
+    job.evaluation.progress = [](std::uint64_t done, std::uint64_t total) {
+      std::cerr << "\revaluating: " << done * 100 / std::max<std::uint64_t>(total, 1) << "% (" << done << " / "
+                << total << " knots)" << std::flush;
+    };
+  batch::TrajectoryReport report;
+  try {
+    report = batch::runTrajectoryJob(function, model, spec, job);
+  } catch (const batch::TrajectoryCancelled& e) {
+    if (terminal) std::cerr << "\n";
+    std::cerr << "robodiff: interrupted: " << e.what() << "; " << args.out << " was not written\n";
+    throw CLI::RuntimeError(kExitInterrupted);
+  }
+  if (terminal) std::cerr << "\r\033[K" << std::flush;
+  const unsigned threads = args.threads ? args.threads : std::max(1u, std::thread::hardware_concurrency());
+  if (args.json)
+    std::cout << reportJson(report, function, spec, model, threads).dump() << "\n";
+  else
+    printSummary(report, function, spec, model, threads);
+}
+
+}  // namespace
+
+void addTrajectoryCommand(CLI::App& app) {
+  auto args = std::make_shared<TrajectoryArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "trajectory", "Evaluate a function (value and derivatives) at every knot of a trajectory file, on all cores");
+  addRobotOptions(*cmd, args->robot);
+  addSpecOption(*cmd, args->spec, true);
+  cmd->add_option("--data", args->data,
+                  "The trajectory: CSV with a header row (t, q_<joint>, v_<joint>, a_<joint>, tau_<joint>, or "
+                  "<block>_<index>), or JSON ({\"t\": [...], \"q\": [[...], ...], ...} or [{\"t\": ..., \"q\": [...]}, "
+                  "...]); columns the function does not use are ignored")
+      ->required()
+      ->type_name("TRAJ.csv|TRAJ.json");
+  cmd->add_option("--out", args->out,
+                  "Where the outputs go, one row per knot: .csv (t, value_<r>, jacobian_<r>_<c>, ...) or .rdb/.bin "
+                  "(a JSON header, then float64 little-endian rows); written atomically")
+      ->required()
+      ->type_name("OUT.csv|OUT.rdb");
+  cmd->add_option("--format", args->format, "Output format regardless of --out's extension")
+      ->check(CLI::IsMember({"csv", "binary"}))
+      ->type_name("csv|binary");
+  cmd->add_option("--backend", args->backend,
+                  "compiled: the compiled library from the cache, built first when missing (batched entry point); "
+                  "interpreted: no compiler, ready at once, slower per knot")
+      ->check(CLI::IsMember({"compiled", "generated", "interpreted"}))
+      ->type_name("compiled|interpreted");
+  cmd->add_option("--cache", args->cache_dir,
+                  "Cache directory for compiled functions (default: $ROBODIFF_CACHE_DIR, else "
+                  "$XDG_CACHE_HOME/robodiff, else ~/.cache/robodiff)")
+      ->type_name("DIR");
+  cmd->add_option("--compiler", args->compiler, "C compiler to run when building (default: $CC, else cc)")
+      ->type_name("CC");
+  cmd->add_option("--threads", args->threads, "Threads evaluating knots (default: all cores)")
+      ->check(CLI::Range(1u, 4096u))
+      ->type_name("N");
+  cmd->add_flag("--json", args->json, "Print the summary as one JSON object");
+  cmd->footer(
+      "Floating base (--floating-base): q_root_joint_x, _y, _z, _qx, _qy, _qz, _qw and "
+      "<block>_root_joint_vx, _vy, _vz, _wx, _wy, _wz. Every used field must be a finite number; a bad row is "
+      "reported as FILE:LINE: column NAME: 'TEXT' ....\n"
+      "Exit status: 0 done; 1 an error (no output file is written); 130 interrupted (Ctrl-C, SIGTERM; no output "
+      "file is written).");
+  cmd->callback([args] { runTrajectory(*args); });
+}
+
+}  // namespace robodiff::cli
