@@ -12,6 +12,12 @@ static_assert(static_cast<std::uint32_t>(Method::EvaluateBatch) == robodiff_wire
 static_assert(static_cast<std::uint32_t>(Method::ListFunctions) == robodiff_wire_METHOD_LIST_FUNCTIONS);
 static_assert(static_cast<std::uint32_t>(Method::Health) == robodiff_wire_METHOD_HEALTH);
 static_assert(static_cast<std::uint32_t>(Method::Release) == robodiff_wire_METHOD_RELEASE);
+static_assert(static_cast<std::uint32_t>(Method::SubmitJob) == robodiff_wire_METHOD_SUBMIT_JOB);
+static_assert(static_cast<std::uint32_t>(Method::JobStatus) == robodiff_wire_METHOD_JOB_STATUS);
+static_assert(static_cast<std::uint32_t>(Method::CancelJob) == robodiff_wire_METHOD_CANCEL_JOB);
+static_assert(static_cast<std::uint32_t>(Method::JobResult) == robodiff_wire_METHOD_JOB_RESULT);
+static_assert(static_cast<std::uint32_t>(JobState::Queued) == robodiff_wire_JOB_QUEUED);
+static_assert(static_cast<std::uint32_t>(JobState::Cancelled) == robodiff_wire_JOB_CANCELLED);
 static_assert(static_cast<std::uint32_t>(FunctionState::Ready) == robodiff_wire_FUNCTION_READY);
 static_assert(static_cast<std::uint32_t>(FunctionState::Building) == robodiff_wire_FUNCTION_BUILDING);
 static_assert(static_cast<std::uint32_t>(FunctionState::Failed) == robodiff_wire_FUNCTION_FAILED);
@@ -28,8 +34,23 @@ const char* toString(Method method) {
     case Method::ListFunctions: return "ListFunctions";
     case Method::Health: return "Health";
     case Method::Release: return "Release";
+    case Method::SubmitJob: return "SubmitJob";
+    case Method::JobStatus: return "JobStatus";
+    case Method::CancelJob: return "CancelJob";
+    case Method::JobResult: return "JobResult";
   }
   return "UnknownMethod";
+}
+
+const char* toString(JobState state) {
+  switch (state) {
+    case JobState::Queued: return "QUEUED";
+    case JobState::Running: return "RUNNING";
+    case JobState::Succeeded: return "SUCCEEDED";
+    case JobState::Failed: return "FAILED";
+    case JobState::Cancelled: return "CANCELLED";
+  }
+  return "UNKNOWN";
 }
 
 const char* toString(FunctionState state) {

@@ -215,6 +215,38 @@ TEST(DdsCodec, ReplyBodiesBothWays) {
   EXPECT_EQ(viaReply(rpc::ReleaseReply{3}).references_left, 3u);
 }
 
+TEST(DdsCodec, JobMessagesBothWays) {
+  const auto submit = viaRequest(rpc::SubmitJobRequest{"trajectory", R"({"data": "t.csv"})"});
+  EXPECT_EQ(submit.kind, "trajectory");
+  EXPECT_EQ(submit.params_json, R"({"data": "t.csv"})");
+  EXPECT_EQ(viaRequest(rpc::JobStatusRequest{"job-1"}).job_id, "job-1");
+  EXPECT_EQ(viaRequest(rpc::CancelJobRequest{"job-2"}).job_id, "job-2");
+  EXPECT_EQ(viaRequest(rpc::JobResultRequest{"job-3"}).job_id, "job-3");
+  EXPECT_EQ(viaReply(rpc::SubmitJobReply{"job-4"}).job_id, "job-4");
+  EXPECT_EQ(viaReply(rpc::CancelJobReply{rpc::JobState::Running}).state, rpc::JobState::Running);
+
+  rpc::JobInfo info{"job-5", "identify", rpc::JobState::Failed, 0.25, 12.5, -1.0, {"stacking", "qr"}, "worker crashed"};
+  rpc::JobStatusReply status;
+  status.jobs = {info, rpc::JobInfo{}};
+  const auto got = viaReply(status);
+  ASSERT_EQ(got.jobs.size(), 2u);
+  EXPECT_EQ(got.jobs[0].job_id, "job-5");
+  EXPECT_EQ(got.jobs[0].kind, "identify");
+  EXPECT_EQ(got.jobs[0].state, rpc::JobState::Failed);
+  EXPECT_EQ(got.jobs[0].progress, 0.25);
+  EXPECT_EQ(got.jobs[0].elapsed_seconds, 12.5);
+  EXPECT_EQ(got.jobs[0].eta_seconds, -1.0);
+  EXPECT_EQ(got.jobs[0].messages, (std::vector<std::string>{"stacking", "qr"}));
+  EXPECT_EQ(got.jobs[0].error, "worker crashed");
+  EXPECT_EQ(got.jobs[1].state, rpc::JobState::Queued);
+
+  rpc::JobResultReply result{info, R"({"knots": 3})", "/var/cache/robodiff/jobs/job-5"};
+  const auto r = viaReply(result);
+  EXPECT_EQ(r.info.messages, info.messages);
+  EXPECT_EQ(r.result_json, R"({"knots": 3})");
+  EXPECT_EQ(r.result_dir, "/var/cache/robodiff/jobs/job-5");
+}
+
 TEST(DdsCodec, DiscriminatorIsTheMethod) {
   WireRequest sample;
   toWire(RequestBody(rpc::ReleaseRequest{"x"}), sample->body);

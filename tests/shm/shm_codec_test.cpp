@@ -105,6 +105,40 @@ TEST(ShmCodec, ListFunctionsReleaseHealthRequests) {
   EXPECT_EQ(p.functions[1].model_id, "m1");
 }
 
+TEST(ShmCodec, JobMessages) {
+  const auto submit = roundTrip(rpc::SubmitJobRequest{"trajopt", R"({"knots": 50})"});
+  EXPECT_EQ(submit.kind, "trajopt");
+  EXPECT_EQ(submit.params_json, R"({"knots": 50})");
+  EXPECT_EQ(roundTrip(rpc::JobStatusRequest{"j1"}).job_id, "j1");
+  EXPECT_EQ(roundTrip(rpc::CancelJobRequest{"j2"}).job_id, "j2");
+  EXPECT_EQ(roundTrip(rpc::JobResultRequest{"j3"}).job_id, "j3");
+  EXPECT_EQ(roundTrip(rpc::SubmitJobReply{"j4"}).job_id, "j4");
+  EXPECT_EQ(roundTrip(rpc::CancelJobReply{rpc::JobState::Succeeded}).state, rpc::JobState::Succeeded);
+
+  const rpc::JobInfo info{"j5", "trajectory", rpc::JobState::Running, 0.5, 3.25, 3.5, {"a", "b"}, ""};
+  rpc::JobStatusReply status;
+  status.jobs = {info, info};
+  status.jobs[1].state = rpc::JobState::Cancelled;
+  const auto got = roundTrip(status);
+  ASSERT_EQ(got.jobs.size(), 2u);
+  EXPECT_EQ(got.jobs[0].progress, 0.5);
+  EXPECT_EQ(got.jobs[0].elapsed_seconds, 3.25);
+  EXPECT_EQ(got.jobs[0].eta_seconds, 3.5);
+  EXPECT_EQ(got.jobs[0].messages, (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(got.jobs[1].state, rpc::JobState::Cancelled);
+  const auto r = roundTrip(rpc::JobResultReply{info, "{}", "/tmp/x"});
+  EXPECT_EQ(r.info.job_id, "j5");
+  EXPECT_EQ(r.result_dir, "/tmp/x");
+
+  // A state beyond the enum is refused, naming the field.
+  auto bytes = encode(rpc::CancelJobReply{rpc::JobState::Queued});
+  bytes[0] = std::byte{9};
+  rpc::CancelJobReply bad;
+  const Status s = decode(bytes, bad);
+  EXPECT_EQ(s.code, StatusCode::InvalidArgument);
+  EXPECT_NE(s.message.find("state"), std::string::npos) << s.message;
+}
+
 TEST(ShmCodec, HealthReplyEveryField) {
   rpc::HealthReply h;
   h.state = rpc::ServingState::Draining;

@@ -379,6 +379,74 @@ void fromWire(const robodiff_wire_HealthReply& in, rpc::HealthReply& out) {
 void toWire(const rpc::ReleaseReply& in, robodiff_wire_ReleaseReply& out) { out.references_left = in.references_left; }
 void fromWire(const robodiff_wire_ReleaseReply& in, rpc::ReleaseReply& out) { out.references_left = in.references_left; }
 
+// ---- jobs -------------------------------------------------------------------------------
+
+namespace {
+
+void jobInfoToWire(const rpc::JobInfo& in, robodiff_wire_JobInfo& out) {
+  out.job_id = dupString(in.job_id);
+  out.kind = dupString(in.kind);
+  out.state = castEnum<robodiff_wire_JobState>(in.state);
+  out.progress = in.progress;
+  out.elapsed_seconds = in.elapsed_seconds;
+  out.eta_seconds = in.eta_seconds;
+  stringsToWire(in.messages, out.messages);
+  out.error = dupString(in.error);
+}
+
+void jobInfoFromWire(const robodiff_wire_JobInfo& in, rpc::JobInfo& out) {
+  out.job_id = toString(in.job_id);
+  out.kind = toString(in.kind);
+  out.state = castEnum<rpc::JobState>(in.state);
+  out.progress = in.progress;
+  out.elapsed_seconds = in.elapsed_seconds;
+  out.eta_seconds = in.eta_seconds;
+  stringsFromWire(in.messages, out.messages);
+  out.error = toString(in.error);
+}
+
+}  // namespace
+
+void toWire(const rpc::SubmitJobRequest& in, robodiff_wire_SubmitJobRequest& out) {
+  out.kind = dupString(in.kind);
+  out.params_json = dupString(in.params_json);
+}
+void fromWire(const robodiff_wire_SubmitJobRequest& in, rpc::SubmitJobRequest& out) {
+  out.kind = toString(in.kind);
+  out.params_json = toString(in.params_json);
+}
+void toWire(const rpc::JobStatusRequest& in, robodiff_wire_JobStatusRequest& out) { out.job_id = dupString(in.job_id); }
+void fromWire(const robodiff_wire_JobStatusRequest& in, rpc::JobStatusRequest& out) { out.job_id = toString(in.job_id); }
+void toWire(const rpc::CancelJobRequest& in, robodiff_wire_CancelJobRequest& out) { out.job_id = dupString(in.job_id); }
+void fromWire(const robodiff_wire_CancelJobRequest& in, rpc::CancelJobRequest& out) { out.job_id = toString(in.job_id); }
+void toWire(const rpc::JobResultRequest& in, robodiff_wire_JobResultRequest& out) { out.job_id = dupString(in.job_id); }
+void fromWire(const robodiff_wire_JobResultRequest& in, rpc::JobResultRequest& out) { out.job_id = toString(in.job_id); }
+
+void toWire(const rpc::SubmitJobReply& in, robodiff_wire_SubmitJobReply& out) { out.job_id = dupString(in.job_id); }
+void fromWire(const robodiff_wire_SubmitJobReply& in, rpc::SubmitJobReply& out) { out.job_id = toString(in.job_id); }
+void toWire(const rpc::JobStatusReply& in, robodiff_wire_JobStatusReply& out) {
+  mapToWire(in.jobs, out.jobs, jobInfoToWire);
+}
+void fromWire(const robodiff_wire_JobStatusReply& in, rpc::JobStatusReply& out) {
+  mapFromWire(in.jobs, out.jobs, jobInfoFromWire);
+}
+void toWire(const rpc::CancelJobReply& in, robodiff_wire_CancelJobReply& out) {
+  out.state = castEnum<robodiff_wire_JobState>(in.state);
+}
+void fromWire(const robodiff_wire_CancelJobReply& in, rpc::CancelJobReply& out) {
+  out.state = castEnum<rpc::JobState>(in.state);
+}
+void toWire(const rpc::JobResultReply& in, robodiff_wire_JobResultReply& out) {
+  jobInfoToWire(in.info, out.info);
+  out.result_json = dupString(in.result_json);
+  out.result_dir = dupString(in.result_dir);
+}
+void fromWire(const robodiff_wire_JobResultReply& in, rpc::JobResultReply& out) {
+  jobInfoFromWire(in.info, out.info);
+  out.result_json = toString(in.result_json);
+  out.result_dir = toString(in.result_dir);
+}
+
 // ---- envelopes -------------------------------------------------------------------------
 
 namespace {
@@ -403,8 +471,16 @@ void bodyToWire(const Body& body, Union& out) {
           toWire(message, out._u.list_functions);
         else if constexpr (std::is_same_v<M, rpc::HealthRequest> || std::is_same_v<M, rpc::HealthReply>)
           toWire(message, out._u.health);
-        else
+        else if constexpr (std::is_same_v<M, rpc::ReleaseRequest> || std::is_same_v<M, rpc::ReleaseReply>)
           toWire(message, out._u.release);
+        else if constexpr (std::is_same_v<M, rpc::SubmitJobRequest> || std::is_same_v<M, rpc::SubmitJobReply>)
+          toWire(message, out._u.submit_job);
+        else if constexpr (std::is_same_v<M, rpc::JobStatusRequest> || std::is_same_v<M, rpc::JobStatusReply>)
+          toWire(message, out._u.job_status);
+        else if constexpr (std::is_same_v<M, rpc::CancelJobRequest> || std::is_same_v<M, rpc::CancelJobReply>)
+          toWire(message, out._u.cancel_job);
+        else
+          toWire(message, out._u.job_result);
       },
       body);
 }
@@ -425,6 +501,10 @@ Status bodyFromWire(const Union& in, Body& out) {
     case rpc::Method::ListFunctions: fromWire(in._u.list_functions, out.template emplace<4>()); break;
     case rpc::Method::Health: fromWire(in._u.health, out.template emplace<5>()); break;
     case rpc::Method::Release: fromWire(in._u.release, out.template emplace<6>()); break;
+    case rpc::Method::SubmitJob: fromWire(in._u.submit_job, out.template emplace<7>()); break;
+    case rpc::Method::JobStatus: fromWire(in._u.job_status, out.template emplace<8>()); break;
+    case rpc::Method::CancelJob: fromWire(in._u.cancel_job, out.template emplace<9>()); break;
+    case rpc::Method::JobResult: fromWire(in._u.job_result, out.template emplace<10>()); break;
   }
   return {};
 }
@@ -445,6 +525,10 @@ ReplyBody emptyReplyBody(rpc::Method method) {
     case rpc::Method::ListFunctions: return rpc::ListFunctionsReply{};
     case rpc::Method::Health: return rpc::HealthReply{};
     case rpc::Method::Release: return rpc::ReleaseReply{};
+    case rpc::Method::SubmitJob: return rpc::SubmitJobReply{};
+    case rpc::Method::JobStatus: return rpc::JobStatusReply{};
+    case rpc::Method::CancelJob: return rpc::CancelJobReply{};
+    case rpc::Method::JobResult: return rpc::JobResultReply{};
   }
   return rpc::HealthReply{};
 }

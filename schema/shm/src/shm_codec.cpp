@@ -32,6 +32,7 @@ class Writer {
   void boolean(bool v) { u8(v ? 1 : 0); }
   void u32(std::uint32_t v) { raw(&v, sizeof v); }
   void u64(std::uint64_t v) { raw(&v, sizeof v); }
+  void f64(double v) { raw(&v, sizeof v); }
   void str(std::string_view s) {
     u32(static_cast<std::uint32_t>(s.size()));
     raw(s.data(), s.size());
@@ -65,6 +66,7 @@ class Reader {
   }
   std::uint32_t u32(const char* field) { std::uint32_t v = 0; raw(&v, sizeof v, field); return v; }
   std::uint64_t u64(const char* field) { std::uint64_t v = 0; raw(&v, sizeof v, field); return v; }
+  double f64(const char* field) { double v = 0; raw(&v, sizeof v, field); return v; }
   std::string str(const char* field) {
     const auto size = u32(field);
     if (!ok()) return {};
@@ -516,6 +518,114 @@ Status decode(std::span<const std::byte> body, rpc::ReleaseReply& m) {
   Reader r(body);
   m.references_left = r.u32("references_left");
   return r.finish("ReleaseReply");
+}
+
+// ---- jobs -------------------------------------------------------------------------------
+
+static void writeJobInfo(Writer& w, const rpc::JobInfo& m) {
+  w.str(m.job_id);
+  w.str(m.kind);
+  w.u32(static_cast<std::uint32_t>(m.state));
+  w.f64(m.progress);
+  w.f64(m.elapsed_seconds);
+  w.f64(m.eta_seconds);
+  writeStrings(w, m.messages);
+  w.str(m.error);
+}
+static void readJobInfo(Reader& r, rpc::JobInfo& m) {
+  m.job_id = r.str("job_id");
+  m.kind = r.str("kind");
+  m.state = r.enumeration<rpc::JobState>("state", 5);
+  m.progress = r.f64("progress");
+  m.elapsed_seconds = r.f64("elapsed_seconds");
+  m.eta_seconds = r.f64("eta_seconds");
+  m.messages = readStrings(r, "messages");
+  m.error = r.str("error");
+}
+
+std::vector<std::byte> encode(const rpc::SubmitJobRequest& m) {
+  Writer w;
+  w.str(m.kind);
+  w.str(m.params_json);
+  return w.take();
+}
+Status decode(std::span<const std::byte> body, rpc::SubmitJobRequest& m) {
+  Reader r(body);
+  m.kind = r.str("kind");
+  m.params_json = r.str("params_json");
+  return r.finish("SubmitJobRequest");
+}
+std::vector<std::byte> encode(const rpc::SubmitJobReply& m) {
+  Writer w;
+  w.str(m.job_id);
+  return w.take();
+}
+Status decode(std::span<const std::byte> body, rpc::SubmitJobReply& m) {
+  Reader r(body);
+  m.job_id = r.str("job_id");
+  return r.finish("SubmitJobReply");
+}
+
+// JobStatus, CancelJob and JobResult requests are a job id each.
+template <class Request>
+static std::vector<std::byte> encodeJobId(const Request& m) {
+  Writer w;
+  w.str(m.job_id);
+  return w.take();
+}
+template <class Request>
+static Status decodeJobId(std::span<const std::byte> body, Request& m, const char* what) {
+  Reader r(body);
+  m.job_id = r.str("job_id");
+  return r.finish(what);
+}
+std::vector<std::byte> encode(const rpc::JobStatusRequest& m) { return encodeJobId(m); }
+std::vector<std::byte> encode(const rpc::CancelJobRequest& m) { return encodeJobId(m); }
+std::vector<std::byte> encode(const rpc::JobResultRequest& m) { return encodeJobId(m); }
+Status decode(std::span<const std::byte> body, rpc::JobStatusRequest& m) {
+  return decodeJobId(body, m, "JobStatusRequest");
+}
+Status decode(std::span<const std::byte> body, rpc::CancelJobRequest& m) {
+  return decodeJobId(body, m, "CancelJobRequest");
+}
+Status decode(std::span<const std::byte> body, rpc::JobResultRequest& m) {
+  return decodeJobId(body, m, "JobResultRequest");
+}
+
+std::vector<std::byte> encode(const rpc::JobStatusReply& m) {
+  Writer w;
+  w.seq(m.jobs, [&](const rpc::JobInfo& j) { writeJobInfo(w, j); });
+  return w.take();
+}
+Status decode(std::span<const std::byte> body, rpc::JobStatusReply& m) {
+  Reader r(body);
+  m.jobs.assign(r.count("jobs", 48), {});
+  for (auto& j : m.jobs) readJobInfo(r, j);
+  return r.finish("JobStatusReply");
+}
+std::vector<std::byte> encode(const rpc::CancelJobReply& m) {
+  Writer w;
+  w.u32(static_cast<std::uint32_t>(m.state));
+  return w.take();
+}
+Status decode(std::span<const std::byte> body, rpc::CancelJobReply& m) {
+  Reader r(body);
+  m.state = r.enumeration<rpc::JobState>("state", 5);
+  return r.finish("CancelJobReply");
+}
+std::vector<std::byte> encode(const rpc::JobResultReply& m) {
+  Writer w;
+  writeJobInfo(w, m.info);
+  w.str(m.result_json);
+  w.str(m.result_dir);
+  return w.take();
+}
+Status decode(std::span<const std::byte> body, rpc::JobResultReply& m) {
+  Reader r(body);
+  readJobInfo(r, m.info);
+  m.result_json = r.str("result_json");
+  m.result_dir = r.str("result_dir");
+  return r.finish("JobResultReply");
 }
 
 // ---- Evaluate bodies as whole messages ------------------------------------------------------

@@ -24,8 +24,12 @@ enum class Method : std::uint32_t {  // robodiff_wire_Method
   ListFunctions = 4,
   Health = 5,
   Release = 6,
+  SubmitJob = 7,
+  JobStatus = 8,
+  CancelJob = 9,
+  JobResult = 10,
 };
-inline constexpr std::uint32_t kMethodCount = 7;
+inline constexpr std::uint32_t kMethodCount = 11;
 const char* toString(Method method);  // "LoadModel", ...
 
 struct SchemaVersion {
@@ -156,6 +160,59 @@ struct ReleaseRequest {
 
 struct ReleaseReply {
   std::uint32_t references_left = 0;
+};
+
+// ---- Jobs ---------------------------------------------------------------------------
+
+// Batch work in worker processes (schema/README.md: the kinds and their JSON).
+enum class JobState : std::uint32_t { Queued = 0, Running = 1, Succeeded = 2, Failed = 3, Cancelled = 4 };
+const char* toString(JobState state);  // "QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"
+inline bool isFinal(JobState s) { return s != JobState::Queued && s != JobState::Running; }
+
+struct SubmitJobRequest {
+  std::string kind;                    // "trajectory", "identify", "trajopt"
+  std::string params_json;             // a JSON object
+};
+
+struct SubmitJobReply {
+  std::string job_id;
+};
+
+struct JobInfo {
+  std::string job_id;
+  std::string kind;
+  JobState state = JobState::Queued;
+  double progress = 0;                 // 0 .. 1
+  double elapsed_seconds = 0;          // since it started running
+  double eta_seconds = -1;             // < 0: unknown
+  std::vector<std::string> messages;   // the latest few, oldest first
+  std::string error;                   // FAILED / CANCELLED: why
+};
+
+struct JobStatusRequest {
+  std::string job_id;                  // empty = every job
+};
+
+struct JobStatusReply {
+  std::vector<JobInfo> jobs;
+};
+
+struct CancelJobRequest {
+  std::string job_id;
+};
+
+struct CancelJobReply {
+  JobState state = JobState::Cancelled;
+};
+
+struct JobResultRequest {
+  std::string job_id;
+};
+
+struct JobResultReply {
+  JobInfo info;
+  std::string result_json;             // the job's result summary
+  std::string result_dir;              // its files, on the server's host
 };
 
 // ---- Health -------------------------------------------------------------------------

@@ -48,7 +48,7 @@ struct Status {
 
 // The schema version this build speaks (robodiff_wire_SCHEMA_VERSION_MAJOR/MINOR).
 inline constexpr std::uint16_t kSchemaVersionMajor = 1;
-inline constexpr std::uint16_t kSchemaVersionMinor = 0;
+inline constexpr std::uint16_t kSchemaVersionMinor = 1;  // 1: the job methods
 
 // The rule a server applies to a request's schema version: same major, and a client
 // minor not newer than the server's (an older client only misses additions; a newer one

@@ -95,6 +95,10 @@ void toWire(const rpc::EvaluateBatchRequest& in, robodiff_wire_EvaluateBatchRequ
 void toWire(const rpc::ListFunctionsRequest& in, robodiff_wire_ListFunctionsRequest& out);
 void toWire(const rpc::HealthRequest& in, robodiff_wire_HealthRequest& out);
 void toWire(const rpc::ReleaseRequest& in, robodiff_wire_ReleaseRequest& out);
+void toWire(const rpc::SubmitJobRequest& in, robodiff_wire_SubmitJobRequest& out);
+void toWire(const rpc::JobStatusRequest& in, robodiff_wire_JobStatusRequest& out);
+void toWire(const rpc::CancelJobRequest& in, robodiff_wire_CancelJobRequest& out);
+void toWire(const rpc::JobResultRequest& in, robodiff_wire_JobResultRequest& out);
 
 void toWire(const rpc::LoadModelReply& in, robodiff_wire_LoadModelReply& out);
 void toWire(const rpc::GetFunctionReply& in, robodiff_wire_GetFunctionReply& out);
@@ -103,6 +107,10 @@ void toWire(const rpc::EvaluateBatchReply& in, robodiff_wire_EvaluateBatchReply&
 void toWire(const rpc::ListFunctionsReply& in, robodiff_wire_ListFunctionsReply& out);
 void toWire(const rpc::HealthReply& in, robodiff_wire_HealthReply& out);
 void toWire(const rpc::ReleaseReply& in, robodiff_wire_ReleaseReply& out);
+void toWire(const rpc::SubmitJobReply& in, robodiff_wire_SubmitJobReply& out);
+void toWire(const rpc::JobStatusReply& in, robodiff_wire_JobStatusReply& out);
+void toWire(const rpc::CancelJobReply& in, robodiff_wire_CancelJobReply& out);
+void toWire(const rpc::JobResultReply& in, robodiff_wire_JobResultReply& out);
 
 void fromWire(const robodiff_wire_LoadModelRequest& in, rpc::LoadModelRequest& out);
 void fromWire(const robodiff_wire_GetFunctionRequest& in, rpc::GetFunctionRequest& out);
@@ -111,6 +119,10 @@ void fromWire(const robodiff_wire_EvaluateBatchRequest& in, rpc::EvaluateBatchRe
 void fromWire(const robodiff_wire_ListFunctionsRequest& in, rpc::ListFunctionsRequest& out);
 void fromWire(const robodiff_wire_HealthRequest& in, rpc::HealthRequest& out);
 void fromWire(const robodiff_wire_ReleaseRequest& in, rpc::ReleaseRequest& out);
+void fromWire(const robodiff_wire_SubmitJobRequest& in, rpc::SubmitJobRequest& out);
+void fromWire(const robodiff_wire_JobStatusRequest& in, rpc::JobStatusRequest& out);
+void fromWire(const robodiff_wire_CancelJobRequest& in, rpc::CancelJobRequest& out);
+void fromWire(const robodiff_wire_JobResultRequest& in, rpc::JobResultRequest& out);
 
 void fromWire(const robodiff_wire_LoadModelReply& in, rpc::LoadModelReply& out);
 void fromWire(const robodiff_wire_GetFunctionReply& in, rpc::GetFunctionReply& out);
@@ -119,16 +131,22 @@ void fromWire(const robodiff_wire_EvaluateBatchReply& in, rpc::EvaluateBatchRepl
 void fromWire(const robodiff_wire_ListFunctionsReply& in, rpc::ListFunctionsReply& out);
 void fromWire(const robodiff_wire_HealthReply& in, rpc::HealthReply& out);
 void fromWire(const robodiff_wire_ReleaseReply& in, rpc::ReleaseReply& out);
+void fromWire(const robodiff_wire_SubmitJobReply& in, rpc::SubmitJobReply& out);
+void fromWire(const robodiff_wire_JobStatusReply& in, rpc::JobStatusReply& out);
+void fromWire(const robodiff_wire_CancelJobReply& in, rpc::CancelJobReply& out);
+void fromWire(const robodiff_wire_JobResultReply& in, rpc::JobResultReply& out);
 
 // ---- envelopes -------------------------------------------------------------------------
 
 // The union members, in Method order: the variant index is the method's number.
 using RequestBody = std::variant<rpc::LoadModelRequest, rpc::GetFunctionRequest, rpc::EvaluateRequest,
                                  rpc::EvaluateBatchRequest, rpc::ListFunctionsRequest, rpc::HealthRequest,
-                                 rpc::ReleaseRequest>;
+                                 rpc::ReleaseRequest, rpc::SubmitJobRequest, rpc::JobStatusRequest,
+                                 rpc::CancelJobRequest, rpc::JobResultRequest>;
 using ReplyBody = std::variant<rpc::LoadModelReply, rpc::GetFunctionReply, rpc::EvaluateReply,
                                rpc::EvaluateBatchReply, rpc::ListFunctionsReply, rpc::HealthReply,
-                               rpc::ReleaseReply>;
+                               rpc::ReleaseReply, rpc::SubmitJobReply, rpc::JobStatusReply, rpc::CancelJobReply,
+                               rpc::JobResultReply>;
 
 // Sets the discriminator and fills the union member (out must be zeroed).
 void toWire(const RequestBody& body, robodiff_wire_RequestBody& out);

@@ -149,6 +149,14 @@ std::vector<std::byte> encode(const rpc::HealthRequest& message);
 std::vector<std::byte> encode(const rpc::HealthReply& message);
 std::vector<std::byte> encode(const rpc::ReleaseRequest& message);
 std::vector<std::byte> encode(const rpc::ReleaseReply& message);
+std::vector<std::byte> encode(const rpc::SubmitJobRequest& message);
+std::vector<std::byte> encode(const rpc::SubmitJobReply& message);
+std::vector<std::byte> encode(const rpc::JobStatusRequest& message);
+std::vector<std::byte> encode(const rpc::JobStatusReply& message);
+std::vector<std::byte> encode(const rpc::CancelJobRequest& message);
+std::vector<std::byte> encode(const rpc::CancelJobReply& message);
+std::vector<std::byte> encode(const rpc::JobResultRequest& message);
+std::vector<std::byte> encode(const rpc::JobResultReply& message);
 
 Status decode(std::span<const std::byte> body, rpc::LoadModelRequest& message);
 Status decode(std::span<const std::byte> body, rpc::LoadModelReply& message);
@@ -160,6 +168,14 @@ Status decode(std::span<const std::byte> body, rpc::HealthRequest& message);
 Status decode(std::span<const std::byte> body, rpc::HealthReply& message);
 Status decode(std::span<const std::byte> body, rpc::ReleaseRequest& message);
 Status decode(std::span<const std::byte> body, rpc::ReleaseReply& message);
+Status decode(std::span<const std::byte> body, rpc::SubmitJobRequest& message);
+Status decode(std::span<const std::byte> body, rpc::SubmitJobReply& message);
+Status decode(std::span<const std::byte> body, rpc::JobStatusRequest& message);
+Status decode(std::span<const std::byte> body, rpc::JobStatusReply& message);
+Status decode(std::span<const std::byte> body, rpc::CancelJobRequest& message);
+Status decode(std::span<const std::byte> body, rpc::CancelJobReply& message);
+Status decode(std::span<const std::byte> body, rpc::JobResultRequest& message);
+Status decode(std::span<const std::byte> body, rpc::JobResultReply& message);
 
 // Whole-message forms of the Evaluate bodies (copies; for tests and tools; the transport
 // uses the views above). The vectors' storage is 8-byte aligned (operator new).
