@@ -326,6 +326,66 @@ Status DdsConnection::evaluateBatch(std::string_view function_id, std::uint64_t 
       options);
 }
 
+Status DdsConnection::submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::SubmitJob,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_SUBMIT_JOB;
+        dds_codec::toWire(request, body._u.submit_job);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.submit_job, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::JobStatus,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_JOB_STATUS;
+        dds_codec::toWire(request, body._u.job_status);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.job_status, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::CancelJob,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_CANCEL_JOB;
+        dds_codec::toWire(request, body._u.cancel_job);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.cancel_job, reply);
+        return Status{};
+      },
+      options);
+}
+
+Status DdsConnection::jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options) {
+  return call(
+      rpc::Method::JobResult,
+      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+        body._d = robodiff_wire_METHOD_JOB_RESULT;
+        dds_codec::toWire(request, body._u.job_result);
+        return nullptr;
+      },
+      [&](const robodiff_wire_Reply& r, bool&) {
+        dds_codec::fromWire(r.body._u.job_result, reply);
+        return Status{};
+      },
+      options);
+}
+
 std::unique_ptr<Connection> connectDds(const DdsConnectionOptions& options) {
   return std::make_unique<DdsConnection>(options);
 }

@@ -362,6 +362,18 @@ Status ShmConnection::health(const rpc::HealthRequest& request, rpc::HealthReply
 Status ShmConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {
   return impl_->compact(rpc::Method::Release, request, reply, options);
 }
+Status ShmConnection::submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::SubmitJob, request, reply, options);
+}
+Status ShmConnection::jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::JobStatus, request, reply, options);
+}
+Status ShmConnection::cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::CancelJob, request, reply, options);
+}
+Status ShmConnection::jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options) {
+  return impl_->compact(rpc::Method::JobResult, request, reply, options);
+}
 Status ShmConnection::evaluate(std::string_view function_id, std::span<const double> inputs, std::span<double> outputs,
                                CallOptions options) {
   return impl_->evaluate(rpc::Method::Evaluate, function_id, 1, inputs, outputs, options);

@@ -248,6 +248,14 @@ void DdsServer::Core::runPosted(const robodiff_wire_Request& sample, const Reque
         return serve(body.health, rpc::HealthRequest{}, rpc::HealthReply{}, &ServiceApi::health);
       case rpc::Method::Release:
         return serve(body.release, rpc::ReleaseRequest{}, rpc::ReleaseReply{}, &ServiceApi::release);
+      case rpc::Method::SubmitJob:
+        return serve(body.submit_job, rpc::SubmitJobRequest{}, rpc::SubmitJobReply{}, &ServiceApi::submitJob);
+      case rpc::Method::JobStatus:
+        return serve(body.job_status, rpc::JobStatusRequest{}, rpc::JobStatusReply{}, &ServiceApi::jobStatus);
+      case rpc::Method::CancelJob:
+        return serve(body.cancel_job, rpc::CancelJobRequest{}, rpc::CancelJobReply{}, &ServiceApi::cancelJob);
+      case rpc::Method::JobResult:
+        return serve(body.job_result, rpc::JobResultRequest{}, rpc::JobResultReply{}, &ServiceApi::jobResult);
       case rpc::Method::EvaluateBatch: return evaluateBatch(info, body.evaluate_batch);
       case rpc::Method::Evaluate: break;  // inline, never posted
     }

@@ -259,7 +259,8 @@ struct ShmServer::Impl {
     rpc::Method method = rpc::Method::Health;
     Clock::time_point received;
     std::variant<rpc::LoadModelRequest, rpc::GetFunctionRequest, rpc::ListFunctionsRequest, rpc::HealthRequest,
-                 rpc::ReleaseRequest>
+                 rpc::ReleaseRequest, rpc::SubmitJobRequest, rpc::JobStatusRequest, rpc::CancelJobRequest,
+                 rpc::JobResultRequest>
         request;
   };
 
@@ -284,6 +285,10 @@ struct ShmServer::Impl {
       case rpc::Method::ListFunctions: s = decodeInto<rpc::ListFunctionsRequest>(*posted, view.body); break;
       case rpc::Method::Health: s = decodeInto<rpc::HealthRequest>(*posted, view.body); break;
       case rpc::Method::Release: s = decodeInto<rpc::ReleaseRequest>(*posted, view.body); break;
+      case rpc::Method::SubmitJob: s = decodeInto<rpc::SubmitJobRequest>(*posted, view.body); break;
+      case rpc::Method::JobStatus: s = decodeInto<rpc::JobStatusRequest>(*posted, view.body); break;
+      case rpc::Method::CancelJob: s = decodeInto<rpc::CancelJobRequest>(*posted, view.body); break;
+      case rpc::Method::JobResult: s = decodeInto<rpc::JobResultRequest>(*posted, view.body); break;
       default: s = {StatusCode::Unimplemented, "method not served by posting"}; break;
     }
     release(payload);  // everything needed is in `posted` now
@@ -385,7 +390,11 @@ struct ShmServer::Impl {
           else if constexpr (std::is_same_v<T, rpc::GetFunctionRequest>) return call(request, rpc::GetFunctionReply{}, &ServiceApi::getFunction);
           else if constexpr (std::is_same_v<T, rpc::ListFunctionsRequest>) return call(request, rpc::ListFunctionsReply{}, &ServiceApi::listFunctions);
           else if constexpr (std::is_same_v<T, rpc::HealthRequest>) return call(request, rpc::HealthReply{}, &ServiceApi::health);
-          else return call(request, rpc::ReleaseReply{}, &ServiceApi::release);
+          else if constexpr (std::is_same_v<T, rpc::ReleaseRequest>) return call(request, rpc::ReleaseReply{}, &ServiceApi::release);
+          else if constexpr (std::is_same_v<T, rpc::SubmitJobRequest>) return call(request, rpc::SubmitJobReply{}, &ServiceApi::submitJob);
+          else if constexpr (std::is_same_v<T, rpc::JobStatusRequest>) return call(request, rpc::JobStatusReply{}, &ServiceApi::jobStatus);
+          else if constexpr (std::is_same_v<T, rpc::CancelJobRequest>) return call(request, rpc::CancelJobReply{}, &ServiceApi::cancelJob);
+          else return call(request, rpc::JobResultReply{}, &ServiceApi::jobResult);
         },
         posted.request);
   }

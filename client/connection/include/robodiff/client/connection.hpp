@@ -48,6 +48,15 @@ class Connection {
                                CallOptions options = {}) = 0;
   virtual Status health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options = {}) = 0;
   virtual Status release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options = {}) = 0;
+  // Jobs: batch work run by the server in its worker processes.
+  virtual Status submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply,
+                           CallOptions options = {}) = 0;
+  virtual Status jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply,
+                           CallOptions options = {}) = 0;
+  virtual Status cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply,
+                           CallOptions options = {}) = 0;
+  virtual Status jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply,
+                           CallOptions options = {}) = 0;
 
   // Inputs: the concatenated input blocks of one knot; outputs: room for the concatenated
   // output blocks. Sizes are not checked here (the server checks them and says what is

@@ -82,6 +82,22 @@ class ServiceApi {
   // NOT_FOUND for an id that is not loaded (or has no references left).
   virtual Status release(const CallContext& ctx, const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply) = 0;
 
+  // Jobs: batch work in worker processes (schema/README.md). The defaults answer
+  // UNIMPLEMENTED, for a service without a job runner (transport tests' fakes).
+  virtual Status submitJob(const CallContext& ctx, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
+    return noJobs();
+  }
+  virtual Status jobStatus(const CallContext& ctx, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) {
+    return noJobs();
+  }
+  virtual Status cancelJob(const CallContext& ctx, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) {
+    return noJobs();
+  }
+  virtual Status jobResult(const CallContext& ctx, const rpc::JobResultRequest& request, rpc::JobResultReply& reply) {
+    return noJobs();
+  }
+  static Status noJobs() { return {StatusCode::Unimplemented, "this server runs no jobs"}; }
+
   // NOT_FOUND for an unknown (or released) function id; otherwise its sizes.
   virtual Status shape(std::string_view function_id, FunctionShape& shape) = 0;
   // One knot: inputs.size() must be input_count and outputs.size() output_count
