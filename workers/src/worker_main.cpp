@@ -1,4 +1,5 @@
-// robodiff-worker: runs build jobs for a WorkerPool (worker_pool.hpp), one at a time.
+// robodiff-worker: runs build jobs and batch jobs for a WorkerPool (worker_pool.hpp), one
+// at a time.
 //
 // Requests come as frames on stdin, replies go as frames on stdout (worker_protocol.hpp).
 // stdout carries nothing else: it is moved to a private descriptor at startup and fd 1
@@ -19,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/batch/batch_job.hpp"
 #include "robodiff/workers/build_job.hpp"
 #include "robodiff/workers/worker_protocol.hpp"
 
@@ -112,6 +114,34 @@ json runBuild(const Channels& c, std::uint64_t id, const json& envelope) {
   return r;
 }
 
+// A batch job (batch/jobs: trajectory, identify, trajopt): {"request": {"kind", "params",
+// "result_dir", "cache_dir"}}. Progress goes out as {"fraction", "message"}; the result
+// is {"ok": true, "result": {...}} or a failure naming the problem.
+json runBatch(const Channels& c, std::uint64_t id, const json& envelope) {
+  const auto request = envelope.find("request");
+  if (request == envelope.end() || !request->is_object())
+    return failure(id, "invalid_request", "a batch request needs a \"request\" object");
+  robodiff::batch::BatchJobContext context;
+  context.result_dir = request->value("result_dir", std::string());
+  context.cache_dir = request->value("cache_dir", std::string());
+  context.progress = [&](double fraction, const std::string& message) {
+    reply(c, {{"id", id}, {"type", "progress"}, {"fraction", fraction}, {"message", message}});
+  };
+  if (context.result_dir.empty()) return failure(id, "invalid_request", "a batch request needs a \"result_dir\"");
+  try {
+    const json params = request->value("params", json::object());
+    json r = result(id, true);
+    r["result"] = robodiff::batch::runBatchJob(request->value("kind", std::string()), params, context);
+    return r;
+  } catch (const robodiff::batch::JobParamsError& e) {
+    return failure(id, "invalid_params", e.what());
+  } catch (const std::bad_alloc&) {
+    return failure(id, "memory", "the job ran out of memory (the job's limit: see the server's job memory setting)");
+  } catch (const std::exception& e) {
+    return failure(id, "failed", e.what());
+  }
+}
+
 // The job's "limits": {"memory_bytes": B}; 0 when absent.
 std::uint64_t memoryLimitOf(const json& envelope) {
   const auto limits = envelope.find("limits");
@@ -144,7 +174,8 @@ json handle(const Channels& c, const std::string& frame) {
     return r;
   }
   if (type == "build") return runBuild(c, id, envelope);
-  return failure(id, "invalid_request", "unknown request type \"" + type + "\" (this worker knows: build, ping)");
+  if (type == "batch") return runBatch(c, id, envelope);
+  return failure(id, "invalid_request", "unknown request type \"" + type + "\" (this worker knows: build, batch, ping)");
 }
 
 }  // namespace

@@ -20,6 +20,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <nlohmann/json.hpp>
+
+#include "robodiff/batch/batch_job.hpp"
 #include "robodiff/server/dds_server.hpp"
 #include "robodiff/server/service.hpp"
 #include "robodiff/server/shm_server.hpp"
@@ -139,6 +142,15 @@ int main(int argc, char** argv) {
   Logger log(stderr, config.log_level, config.log_format);
   const auto started = std::chrono::steady_clock::now();
   try {
+    // A submitted job's kind and parameters are checked before it is queued.
+    config.service.validate_job = [](const std::string& kind, const std::string& params_json) -> robodiff::Status {
+      try {
+        robodiff::batch::validateBatchJob(kind, nlohmann::json::parse(params_json));
+        return {};
+      } catch (const std::exception& e) {
+        return {robodiff::StatusCode::InvalidArgument, "SubmitJob " + kind + ": " + e.what()};
+      }
+    };
     Service service(config.service, log);
 
     // A RouDi started here must outlive this process's iceoryx runtime, which unregisters

@@ -95,7 +95,18 @@ Service::State::State(ServiceOptions o, Logger& l)
       requests("request", std::max(1u, options.request_threads),
                std::max<std::size_t>(1, options.request_queue_capacity), [this](const std::string& what) {
                  log.error("internal_error", {{"message", what}});
-               }) {}
+               }) {
+  if (options.job_workers > 0) {
+    JobManagerOptions j;
+    j.cache_dir = cache.dir();
+    j.workers = options.job_workers;
+    j.worker_executable = options.worker_executable;
+    j.timeout = options.job_timeout;
+    j.memory_limit_bytes = options.job_memory_limit_bytes;
+    j.validate = options.validate_job;
+    jobs = std::make_unique<JobManager>(std::move(j), log);
+  }
+}
 
 Service::Service(ServiceOptions options, Logger& log) : state_(std::make_unique<State>(std::move(options), log)) {
   const State& s = *state_;
@@ -115,6 +126,7 @@ Service::~Service() {
   s.requests.stop();  // runs what was posted, then joins the request threads
   while (s.in_flight.load(std::memory_order_acquire) != 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   s.builds.stop();  // cancels library builds still running
+  s.jobs.reset();   // cancels jobs still running (they end FAILED: robodiffd stopped)
   s.log.info("service_stopped", {{"instance_id", s.instance_id},
                                  {"uptime_seconds", std::chrono::duration<double>(Clock::now() - s.started).count()}});
 }
@@ -270,6 +282,32 @@ Status Service::release(const CallContext& ctx, const rpc::ReleaseRequest& reque
     if (released.model_unloaded) s.log.info("model_unloaded", {{"model_id", released.model_unloaded->id}});
     return {};
   });
+}
+
+// The job methods: the JobManager's, with the service's accounting and error guard.
+// (A template over the state: Service::State is private, and deduction needs no name.)
+template <class State, class Request, class Reply>
+static Status jobCall(State& s, const CallContext& ctx, const char* method, const Request& request,
+                      Reply& reply, Status (JobManager::*call)(const Request&, Reply&)) {
+  const InFlight in_flight(s.in_flight);
+  return guarded(s.log, method, [&]() -> Status {
+    if (ctx.expired()) return detail::deadlineExceeded(ctx, method);
+    if (!s.jobs) return ServiceApi::noJobs();
+    return ((*s.jobs).*call)(request, reply);
+  });
+}
+
+Status Service::submitJob(const CallContext& ctx, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
+  return jobCall(*state_, ctx, "SubmitJob", request, reply, &JobManager::submit);
+}
+Status Service::jobStatus(const CallContext& ctx, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) {
+  return jobCall(*state_, ctx, "JobStatus", request, reply, &JobManager::status);
+}
+Status Service::cancelJob(const CallContext& ctx, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) {
+  return jobCall(*state_, ctx, "CancelJob", request, reply, &JobManager::cancel);
+}
+Status Service::jobResult(const CallContext& ctx, const rpc::JobResultRequest& request, rpc::JobResultReply& reply) {
+  return jobCall(*state_, ctx, "JobResult", request, reply, &JobManager::result);
 }
 
 bool Service::post(std::function<void()> task) { return state_->requests.post(std::move(task)); }

@@ -1,7 +1,7 @@
 #pragma once
 // Service::State: everything a Service owns, in the order it is built (and the reverse
 // of the order it goes): the cache, the worker pool, the registry, the builds, the
-// batch threads, the request threads. Shared by service.cpp (requests, lifetime),
+// batch threads, the jobs, the request threads. Shared by service.cpp (requests, lifetime),
 // service_evaluation.cpp (the hot path) and service_health.cpp (figures).
 
 #include <atomic>
@@ -13,6 +13,7 @@
 #include "registry.hpp"
 #include "request_stats.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/server/job_manager.hpp"
 #include "robodiff/server/service.hpp"
 #include "robodiff/workers/worker_pool.hpp"
 #include "task_queue.hpp"
@@ -35,6 +36,7 @@ struct Service::State {
   detail::RequestStats stats;
   detail::FunctionBuilds builds;
   detail::BatchRunner batch;
+  std::unique_ptr<JobManager> jobs;  // null: options.job_workers == 0
   detail::TaskQueue requests;  // last: its threads call into everything above
 };
 

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -34,6 +35,12 @@ struct ServiceOptions {
   std::size_t max_urdf_bytes = std::size_t{16} << 20;  // beyond: INVALID_ARGUMENT
   std::string instance_id;                   // empty: "<host>:<pid>:<random>"
   std::string version = "0.1.0";             // reported by Health
+  // Batch jobs (job_manager.hpp): worker processes of their own; 0: no jobs (UNIMPLEMENTED).
+  unsigned job_workers = 1;
+  std::chrono::milliseconds job_timeout = std::chrono::hours(2);
+  std::uint64_t job_memory_limit_bytes = std::uint64_t{8} << 30;
+  // Checks a job's kind and parameters at SubmitJob (robodiffd: batch::validateBatchJob).
+  std::function<Status(const std::string& kind, const std::string& params_json)> validate_job;
 };
 
 class Service final : public ServiceApi {
@@ -65,6 +72,10 @@ class Service final : public ServiceApi {
                        rpc::ListFunctionsReply& reply) override;
   Status health(const CallContext& ctx, const rpc::HealthRequest& request, rpc::HealthReply& reply) override;
   Status release(const CallContext& ctx, const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply) override;
+  Status submitJob(const CallContext& ctx, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) override;
+  Status jobStatus(const CallContext& ctx, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) override;
+  Status cancelJob(const CallContext& ctx, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) override;
+  Status jobResult(const CallContext& ctx, const rpc::JobResultRequest& request, rpc::JobResultReply& reply) override;
   Status shape(std::string_view function_id, FunctionShape& shape) override;
   Status evaluate(const CallContext& ctx, std::string_view function_id, std::span<const double> inputs,
                   std::span<double> outputs) override;

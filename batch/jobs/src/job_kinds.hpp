@@ -1,0 +1,13 @@
+#pragma once
+// One pair of functions per job kind (one file each): check the parameters, run the job.
+#include <nlohmann/json.hpp>
+
+#include "robodiff/batch/batch_job.hpp"
+
+namespace robodiff::batch {
+
+// trajectory_job.cpp: a function evaluated along a trajectory file.
+void validateTrajectoryParams(const nlohmann::json& params);
+nlohmann::json runTrajectoryKind(const nlohmann::json& params, const BatchJobContext& context);
+
+}  // namespace robodiff::batch
