@@ -14,6 +14,10 @@ void addCheckCommand(CLI::App& app);     // check_command.cpp
 void addBenchCommand(CLI::App& app);     // bench_command.cpp
 void addWarmupCommand(CLI::App& app);    // warmup_command.cpp
 void addCacheCommand(CLI::App& app);     // cache_command.cpp
+// Batch work (batch/): trajectories, identification, trajectory optimisation.
+void addTrajectoryCommand(CLI::App& app);  // trajectory_command.cpp
+void addIdentifyCommand(CLI::App& app);    // identify_command.cpp
+void addTrajoptCommand(CLI::App& app);     // trajopt_command.cpp
 
 // Clients of the running server, robodiffd (service_connection.hpp: --server, --timeout,
 // exit statuses 0 OK, 1 the server answered an error, 2 bad usage, 3 no server).
@@ -21,6 +25,7 @@ void addLoadCommand(CLI::App& app);       // load_command.cpp
 void addEvalCommand(CLI::App& app);       // eval_command.cpp
 void addFunctionsCommand(CLI::App& app);  // functions_command.cpp
 void addHealthCommand(CLI::App& app);     // health_command.cpp
+void addJobCommand(CLI::App& app);        // job_command.cpp
 // The subcommand names whose usage errors exit with status 2 (the service commands, and
 // warmup with --server).
 bool isServiceCommandLine(int argc, char** argv);

@@ -12,7 +12,8 @@ namespace robodiff::cli {
 bool isServiceCommandLine(int argc, char** argv) {
   if (argc < 2) return false;
   const std::string command = argv[1];
-  if (command == "load" || command == "eval" || command == "functions" || command == "health") return true;
+  if (command == "load" || command == "eval" || command == "functions" || command == "health" || command == "job")
+    return true;
   if (command != "warmup") return false;
   for (int i = 2; i < argc; ++i)
     if (std::strcmp(argv[i], "--server") == 0 || std::strncmp(argv[i], "--server=", 9) == 0) return true;
@@ -32,10 +33,14 @@ int main(int argc, char** argv) {
   addBenchCommand(app);
   addWarmupCommand(app);
   addCacheCommand(app);
+  addTrajectoryCommand(app);
+  addIdentifyCommand(app);
+  addTrajoptCommand(app);
   addLoadCommand(app);
   addEvalCommand(app);
   addFunctionsCommand(app);
   addHealthCommand(app);
+  addJobCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {
