@@ -1,0 +1,48 @@
+// What the identification tests share: the project's arm7 robot (and the Panda from
+// ../shared), a perturbed copy as the known truth, synthetic samples, and the regressor
+// on the interpreter (ready at once; the compiled backend is exercised by the CLI test
+// and the benchmark).
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "robodiff/batch/identification.hpp"
+#include "robodiff/batch/synthetic_samples.hpp"
+#include "robodiff/model/urdf_loader.hpp"
+#include "support/test_paths.hpp"
+
+namespace robodiff::testing {
+
+struct Robot {
+  std::filesystem::path path;
+  std::string urdf;
+  Model model;
+};
+
+inline Robot loadRobot(const std::filesystem::path& path) {
+  Robot robot{path, readFile(path), {}};
+  robot.model = loadUrdfString(robot.urdf, RootJoint::Fixed, path.string());
+  return robot;
+}
+
+inline Robot arm7() { return loadRobot(sourceDir() / "examples/robots/arm7.urdf"); }
+
+inline batch::IdentificationOptions interpretedOptions(double holdout = 0.0, bool weighted = false) {
+  batch::IdentificationOptions options;
+  options.holdout = holdout;
+  options.weighted = weighted;
+  options.function.backend = batch::Backend::Interpreted;
+  options.function.threads = 2;
+  return options;
+}
+
+inline batch::SyntheticOptions syntheticOptions(std::size_t samples, double noise, std::uint64_t seed = 7) {
+  batch::SyntheticOptions options;
+  options.samples = samples;
+  options.noise = noise;
+  options.seed = seed;
+  return options;
+}
+
+}  // namespace robodiff::testing
