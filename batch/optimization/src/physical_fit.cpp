@@ -2,6 +2,7 @@
 #include "robodiff/batch/physical_fit.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 
 namespace robodiff::batch {
@@ -10,7 +11,9 @@ PhysicalFitResult fitPhysicalParameters(const NormalEquations& data, const Eigen
                                         const PhysicalFitOptions& options) {
   PhysicalFitResult result;
   const auto start = std::chrono::steady_clock::now();
-  PhysicalFitProgram program(data, prior, options.regularization, options.divergence_weight, options.on_iteration);
+  const double rows = static_cast<double>(std::max<std::int64_t>(data.rows, 1));
+  const double lambda = options.regularization * PhysicalFitOptions::kRegularizationReferenceRows / rows;
+  PhysicalFitProgram program(data, prior, lambda, options.divergence_weight, options.on_iteration);
   result.setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.projected_prior_bodies = program.projectedBodies();
 

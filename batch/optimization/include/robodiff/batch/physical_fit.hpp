@@ -32,7 +32,12 @@ struct PhysicalFitOptions {
   // parameter from the prior by its body's own scale (its mass, mass x radius, mass x
   // radius^2); see physical_fit_program.hpp. 0: no regularisation (unexcited directions
   // are then free, and a body the data push to the boundary drifts towards it).
+  // It is the pull at kRegularizationReferenceRows rows of data and is scaled by
+  // reference / rows: the prior weighs the same whatever the amount of data (as a
+  // Bayesian prior does), so its bias fades as samples accumulate, and few samples are
+  // held close to the URDF.
   double regularization = 1e-5;
+  static constexpr double kRegularizationReferenceRows = 10000;
   // The log-det divergence from the prior (a barrier keeping each body strictly valid),
   // relative to the quadratic pull; 0: the quadratic alone.
   double divergence_weight = 1;
