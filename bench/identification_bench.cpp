@@ -2,8 +2,9 @@
 // (../shared; arm7 when it is absent), by phase: the CSV read, the base parameters, the
 // regressor built into a fresh cache (once) and opened from it, stacked with the compiled
 // function on all cores (and with the interpreter, for comparison), ordinary and weighted
-// least squares, the report. Synthetic samples from a perturbed model (the truth), with
-// noise; the identified base parameters' errors are printed in standard errors.
+// least squares, the report, and the physically consistent fit (normal equations, Ipopt).
+// Synthetic samples from a perturbed model (the truth), with noise; the identified base
+// parameters' errors are printed in standard errors.
 //
 //   identification_bench [samples (default 10000)] [threads (default: all cores)]
 #include <chrono>
@@ -17,6 +18,7 @@
 #include <unistd.h>
 
 #include "robodiff/batch/identification.hpp"
+#include "robodiff/batch/physical_identification.hpp"
 #include "robodiff/batch/synthetic_samples.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 
@@ -116,6 +118,16 @@ int main(int argc, char** argv) {
   const batch::IdentificationResult wls = batch::identifyLeastSquares(problem, options);
   rows.push_back({"weighted least squares (OLS, weights, refit)", phaseSeconds(wls, "weighted least squares"), ""});
 
+  // The physically consistent fit on the same problem (OLS weighting, the default regularisation).
+  options.weighted = false;
+  const batch::IdentificationResult physical = batch::identifyPhysical(problem, options);
+  std::snprintf(note, sizeof note, "%zu x %d into %d x %d", equations, problem.base.standard_count,
+                problem.base.standard_count, problem.base.standard_count);
+  rows.push_back({"physical: normal equations (streamed)", phaseSeconds(physical, "normal equations"), note});
+  std::snprintf(note, sizeof note, "%s, %d iterations, setup %.3f s", physical.solver->status.c_str(),
+                physical.solver->iterations, physical.solver->setup_seconds);
+  rows.push_back({"physical: fit with Ipopt", phaseSeconds(physical, "physically consistent fit (Ipopt)"), note});
+
   // The interpreter, for comparison.
   batch::BatchFunctionOptions interpreted = options.function;
   interpreted.backend = batch::Backend::Interpreted;
@@ -140,6 +152,12 @@ int main(int argc, char** argv) {
   const Eigen::VectorXd z = (ols.base_values - truth_base).cwiseQuotient(ols.base_std_errors).cwiseAbs();
   std::printf("\nOLS: largest |error| / std error %.2f, mean %.2f; held-out RMS %.4f..%.4f N m (noise %.3f)\n",
               z.maxCoeff(), z.mean(), ols.rms_held_out.minCoeff(), ols.rms_held_out.maxCoeff(), data.noise);
+  int valid = 0, ols_valid = 0;
+  for (const batch::BodyResult& b : physical.bodies) valid += b.validity.valid;
+  for (const batch::BodyResult& b : ols.bodies) ols_valid += b.validity.valid;
+  std::printf("physical: held-out RMS %.4f..%.4f N m; valid bodies %d of %zu (OLS: %d)\n",
+              physical.rms_held_out.minCoeff(), physical.rms_held_out.maxCoeff(), valid, physical.bodies.size(),
+              ols_valid);
   fs::remove_all(dir);
   return 0;
 }

@@ -1,8 +1,9 @@
 // `robodiff identify`: inertial parameter identification from measured samples (q, v, a,
-// tau; CSV) by least squares on the base parameters (batch/identification): the regressor
-// generated like any other function (compiled through the cache, or interpreted) and
-// stacked over the samples, OLS or WLS, residuals on fit and held-out samples, and a URDF
-// with the identified inertials.
+// tau; CSV) (batch/identification): the regressor generated like any other function
+// (compiled through the cache, or interpreted) and stacked over the samples, OLS or WLS on
+// the base parameters or the physically consistent fit with Ipopt (--physical), residuals
+// on fit and held-out samples, the validity of every body, and a URDF with the identified
+// inertials.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +22,7 @@
 #include "robodiff/batch/identification.hpp"
 #include "robodiff/batch/identification_json.hpp"
 #include "robodiff/batch/measured_samples.hpp"
+#include "robodiff/batch/physical_identification.hpp"
 #include "robodiff/batch/urdf_inertials.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 
@@ -31,6 +33,7 @@ struct IdentifyArgs {
   RobotArgs robot;
   std::string data, out_urdf, backend = "compiled", cache_dir, compiler;
   double holdout = 0.0;
+  double regularization = batch::PhysicalFitOptions{}.regularization;
   bool weighted = false, physical = false, json = false;
   unsigned threads = 0;
 };
@@ -46,14 +49,6 @@ std::string readText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("--urdf " + path + ": cannot open the file");
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-// The hook of the physically consistent estimator (Ipopt), which takes the same problem
-// and gives the same kind of result (batch::resultFor).
-batch::IdentificationResult identifyPhysical(const batch::IdentificationProblem&, const batch::IdentificationOptions&) {
-  throw std::runtime_error(
-      "--physical: physically consistent identification (Ipopt) is not available yet; "
-      "run without --physical for least squares");
 }
 
 struct UrdfOutcome {
@@ -78,13 +73,18 @@ UrdfOutcome writeUrdf(const IdentifyArgs& args, const batch::IdentificationProbl
   return outcome;
 }
 
+std::string methodName(const batch::IdentificationResult& result) {
+  if (result.method == "physical") return "physically consistent fit (Ipopt)";
+  return result.method == "wls" ? "weighted least squares" : "ordinary least squares";
+}
+
 void printTables(const IdentifyArgs& args, const batch::IdentificationProblem& problem,
                  const batch::IdentificationResult& result, const UrdfOutcome& urdf, double total_seconds) {
   const batch::BaseParameters& base = problem.base;
   std::cout << "identify " << (problem.model.name.empty() ? args.robot.urdf : problem.model.name) << ": "
             << problem.model.njoints() << " bodies, " << base.standard_count << " standard -> " << base.size()
-            << " base parameters; " << (result.method == "wls" ? "weighted" : "ordinary") << " least squares on "
-            << problem.fit.samples() << " samples, " << problem.held_out.samples() << " held out\n\n";
+            << " base parameters; " << methodName(result) << " on " << problem.fit.samples() << " samples, "
+            << problem.held_out.samples() << " held out\n\n";
 
   std::cout << "Base parameters (identifiable combinations; units kg, kg m, kg m^2)\n";
   Table params = Table::rows({"#", "value", "std error", "rel. std %", "URDF", "base parameter"},
@@ -119,12 +119,33 @@ void printTables(const IdentifyArgs& args, const batch::IdentificationProblem& p
                    fixed(b.com.y(), "%.4g"), fixed(b.com.z(), "%.4g"), fixed(b.inertia(0, 0), "%.4g"),
                    fixed(b.inertia(1, 1), "%.4g"), fixed(b.inertia(2, 2), "%.4g"), fixed(b.inertia(0, 1), "%.3g"),
                    fixed(b.inertia(0, 2), "%.3g"), fixed(b.inertia(1, 2), "%.3g"),
-                   result.bodies[j].consistency_problem.empty() ? "yes" : "NO", merged});
+                   result.bodies[j].validity.valid ? "yes" : "NO", merged});
   }
   bodies.print(std::cout);
 
-  std::cout << "\nsigma " << fixed(result.sigma, "%.4g") << ", condition number " << fixed(result.condition_number, "%.4g")
-            << ", " << problem.fit.W.rows() << " equations\n";
+  std::cout << "\nPhysical validity per body (principal moments about the centre of mass, kg m^2)\n";
+  Table validity = Table::rows({"link", "valid", "mass", "moment 1", "moment 2", "moment 3", "triangle margin",
+                                "min eig. pseudo-inertia"},
+                               {false, false, true, true, true, true, true, true});
+  for (std::size_t j = 0; j < result.bodies.size(); ++j) {
+    const batch::BodyValidity& v = result.bodies[j].validity;
+    validity.addRow({problem.layout.bodies[j].link, v.valid ? "yes" : "NO", fixed(v.mass, "%.5g"),
+                     fixed(v.principal_moments[0], "%.4g"), fixed(v.principal_moments[1], "%.4g"),
+                     fixed(v.principal_moments[2], "%.4g"), fixed(v.triangle_margin, "%.4g"),
+                     fixed(v.pseudo_inertia_min_eigenvalue, "%.4g")});
+  }
+  validity.print(std::cout);
+
+  if (const std::optional<batch::SolverReport>& s = result.solver) {
+    std::cout << "\nIpopt: " << s->status << (s->success ? "" : " (not converged)") << ", " << s->iterations
+              << " iterations, " << fixed(s->seconds, "%.3f") << " s; regularization "
+              << fixed(s->regularization, "%.3g") << ", weighting " << s->weighting
+              << (s->weighting == "ols" ? ", residual RMS " : ", weighted residual RMS ")
+              << fixed(s->residual_rms, "%.4g") << ", " << problem.fit.W.rows() << " equations\n";
+  } else {
+    std::cout << "\nsigma " << fixed(result.sigma, "%.4g") << ", condition number "
+              << fixed(result.condition_number, "%.4g") << ", " << problem.fit.W.rows() << " equations\n";
+  }
   std::cout << "\nTime\n";
   Table times = Table::rows({"phase", "seconds"}, {false, true});
   for (const batch::PhaseTime& t : result.times) times.addRow({t.phase, fixed(t.seconds, "%.4f")});
@@ -152,6 +173,9 @@ void identify(const IdentifyArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   if (!(args.holdout >= 0.0 && args.holdout < 1.0))
     throw std::invalid_argument("--holdout " + std::to_string(args.holdout) + ": must be in [0, 1)");
+  if (!(args.regularization >= 0.0) || !std::isfinite(args.regularization))
+    throw std::invalid_argument("--regularization " + std::to_string(args.regularization) +
+                                ": must be finite and >= 0");
   batch::IdentificationOptions options;
   options.holdout = args.holdout;
   options.weighted = args.weighted;
@@ -173,8 +197,10 @@ void identify(const IdentifyArgs& args) {
 
   const batch::IdentificationProblem problem =
       batch::prepareIdentification(model, urdf_text, args.robot.urdf, args.robot.floating_base, samples, options);
-  batch::IdentificationResult result =
-      args.physical ? identifyPhysical(problem, options) : batch::identifyLeastSquares(problem, options);
+  batch::PhysicalFitOptions physical;
+  physical.regularization = args.regularization;
+  batch::IdentificationResult result = args.physical ? batch::identifyPhysical(problem, options, physical)
+                                                     : batch::identifyLeastSquares(problem, options);
   result.times.insert(result.times.begin(), {"reading samples", read_seconds});
   const UrdfOutcome urdf = writeUrdf(args, problem, result);
   const double total = batch::secondsSince(start);
@@ -203,7 +229,8 @@ void identify(const IdentifyArgs& args) {
 
 void addIdentifyCommand(CLI::App& app) {
   auto args = std::make_shared<IdentifyArgs>();
-  CLI::App* cmd = app.add_subcommand("identify", "Identify inertial parameters from measured samples (least squares)");
+  CLI::App* cmd = app.add_subcommand(
+      "identify", "Identify inertial parameters from measured samples (least squares, or physically consistent)");
   addRobotOptions(*cmd, args->robot);
   cmd->add_option("--data", args->data,
                   "Measured samples, CSV: a header naming the columns q_<joint>, v_<joint>, a_<joint>, tau_<joint> "
@@ -215,14 +242,28 @@ void addIdentifyCommand(CLI::App& app) {
                   "how the identified model predicts motion it has not seen");
   cmd->add_flag("--weighted", args->weighted,
                 "Weighted least squares: each joint's rows weighted by 1/sigma_j, its noise estimated from the "
-                "ordinary fit's residuals (one iteration)");
-  cmd->add_flag("--physical", args->physical,
-                "Physically consistent identification (positive masses, valid inertias) with Ipopt: not available yet");
+                "ordinary fit's residuals (one iteration); with --physical, the same noise estimate weights the "
+                "physical fit's rows by 1/sigma_j^2");
+  CLI::Option* physical = cmd->add_flag(
+      "--physical", args->physical,
+      "Physically consistent identification with Ipopt: every body keeps a positive mass, a positive definite "
+      "inertia about its centre of mass and the triangle inequalities, however poor the data; the fit of all the "
+      "standard parameters is pulled towards the URDF's values (--regularization), so what the data cannot tell "
+      "stays near the URDF. Its identified URDF is always writable");
+  cmd->add_option("--regularization", args->regularization,
+                  "With --physical: the pull towards the URDF's values, as the cost (relative to the torques' sum of "
+                  "squares) of moving a parameter by its body's own size (default " +
+                      fixed(batch::PhysicalFitOptions{}.regularization, "%g") +
+                      "); 0 leaves unexcited directions free")
+      ->needs(physical)
+      ->type_name("LAMBDA");
   cmd->add_option("--out-urdf", args->out_urdf,
                   "Write the URDF with the identified inertials (each joint's composite body on its child link, links "
                   "fixed to it zeroed; everything else unchanged)")
       ->type_name("FILE");
-  cmd->add_flag("--json", args->json, "Print the result as JSON (base parameters, bodies, residuals, times)");
+  cmd->add_flag("--json", args->json,
+                "Print the result as JSON (base parameters, bodies and their validity, residuals, times; Ipopt's run "
+                "with --physical)");
   cmd->add_option("--backend", args->backend,
                   "How the regressor runs: compiled (default: generated C from the cache, built once per robot) or "
                   "interpreted (no compiler; slower per sample)")
@@ -236,8 +277,10 @@ void addIdentifyCommand(CLI::App& app) {
   cmd->footer(
       "Base parameters are the combinations of standard parameters (per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, "
       "Iyz, Izz about the joint frame's origin) that joint torques determine, found by QR with column pivoting. "
-      "Exit status: 0 done, 1 an error (bad file, samples that do not excite the parameters, an identified body "
-      "the URDF cannot hold).");
+      "Least squares estimates them and completes the standard parameters towards the URDF's; --physical fits the "
+      "standard parameters directly (log-Cholesky coordinates, Ipopt) and reports Ipopt's status, iterations and "
+      "time. Every body's physical validity is reported. Exit status: 0 done, 1 an error (bad file, samples that do "
+      "not excite the parameters for least squares, an identified body the URDF cannot hold).");
   cmd->callback([args] { identify(*args); });
 }
 

@@ -45,4 +45,28 @@ inline batch::SyntheticOptions syntheticOptions(std::size_t samples, double nois
   return options;
 }
 
+// Poor samples to fit, rich ones to hold out: `poor` samples at 100 Hz of one smooth motion
+// (a fraction of a second: the arm hardly leaves its pose), then `rich` samples drawn
+// anywhere in the joints' ranges; torque noise `sigma` on both. Least squares on the poor
+// part leaves physically invalid bodies (the physical identification tests assert it).
+inline batch::MeasuredSamples poorThenRichSamples(const Model& truth, double sigma, std::size_t poor,
+                                                  std::size_t rich) {
+  const batch::MeasuredSamples first = batch::syntheticSamples(truth, syntheticOptions(poor, sigma, 31));
+  batch::SyntheticOptions anywhere = syntheticOptions(rich, sigma, 32);
+  anywhere.excitation = batch::Excitation::Random;
+  const batch::MeasuredSamples second = batch::syntheticSamples(truth, anywhere);
+  const auto join = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+    Eigen::MatrixXd m(a.rows(), a.cols() + b.cols());
+    m << a, b;
+    return m;
+  };
+  batch::MeasuredSamples out;
+  out.source = "<synthetic>";
+  out.q = join(first.q, second.q);
+  out.v = join(first.v, second.v);
+  out.a = join(first.a, second.a);
+  out.tau = join(first.tau, second.tau);
+  return out;
+}
+
 }  // namespace robodiff::testing

@@ -35,8 +35,8 @@ TEST(PandaIdentification, RecoversThePerturbedTruth) {
   // that no URDF can hold (negative mass, indefinite inertia), and then the writer says which.
   std::string unwritable;
   for (std::size_t j = 0; j < result.bodies.size(); ++j) {
-    const std::string& problem_text = result.bodies[j].consistency_problem;
-    if (!problem_text.empty() && problem_text.find("triangle") == std::string::npos && unwritable.empty())
+    const batch::BodyValidity& v = result.bodies[j].validity;
+    if (!v.valid && (v.mass <= 0 || v.principal_moments[0] < 0) && unwritable.empty())
       unwritable = problem.layout.bodies[j].link;
   }
   if (!unwritable.empty()) {

@@ -88,7 +88,7 @@ TEST(MeasuredSamples, ANonNumberNamesTheLineTheColumnAndTheText) {
   // Comments and blank lines count as lines.
   EXPECT_EQ(errorOf(std::string("# note\n") + kHeader + "\n0,1,2,3,4,1.5.2,6,7,8\n"),
             "samples.csv:4: column a_j1: '1.5.2' is not a number");
-  EXPECT_EQ(errorOf(std::string(kHeader) + "0,1,,3,4,5,6,7,8\n"), "samples.csv:2: column q_j2: '' is empty");
+  EXPECT_EQ(errorOf(std::string(kHeader) + "0,1,,3,4,5,6,7,8\n"), "samples.csv:2: column q_j2: is empty");
   EXPECT_EQ(errorOf(std::string(kHeader) + "0,1,2,3,4,5,6,7,1e999\n"),
             "samples.csv:2: column tau_j2: '1e999' is out of the range of a double");
   EXPECT_EQ(errorOf(std::string(kHeader) + "x,1,2,3,4,5,6,7,8\n"), "samples.csv:2: column t: 'x' is not a number");
@@ -102,8 +102,9 @@ TEST(MeasuredSamples, NanAndInfAreRejected) {
 
 TEST(MeasuredSamples, AWrongFieldCountNamesTheLine) {
   EXPECT_EQ(errorOf(std::string(kHeader) + "0,1,2,3,4,5,6,7,8\n0,1,2,3,4,5,6,7,8,9\n"),
-            "samples.csv:3: 10 fields, the header has 9");
-  EXPECT_EQ(errorOf(std::string(kHeader) + "0,1,2\n"), "samples.csv:2: 3 fields, the header has 9");
+            "samples.csv:3: 10 fields, the header (line 1) has 9");
+  EXPECT_EQ(errorOf(std::string("# note\n") + kHeader + "0,1,2\n"),
+            "samples.csv:3: 3 fields, the header (line 2) has 9");
 }
 
 TEST(MeasuredSamples, MissingColumnsAreListedByName) {
@@ -111,14 +112,17 @@ TEST(MeasuredSamples, MissingColumnsAreListedByName) {
             "samples.csv:1: the header lacks 2 columns of robot 'two': v_j2, tau_j2 "
             "(expected q_, v_, a_ and tau_ columns per joint)");
   EXPECT_EQ(errorOf("q_j1,q_j2,v_j1,v_j2,a_j1,a_j2,tau_j1,tau_j2,q_j1\n"),
-            "samples.csv:1: column q_j1 appears twice in the header");
+            "samples.csv:1: column 'q_j1' is named twice in the header");
 }
 
 TEST(MeasuredSamples, EmptyFilesAreReported) {
-  EXPECT_EQ(errorOf(""), "samples.csv: no header row (the file has no data)");
-  EXPECT_EQ(errorOf("# only a comment\n\n"), "samples.csv: no header row (the file has no data)");
+  const std::string no_header =
+      "samples.csv: no header row (the first line that is not blank or a # comment names the columns)";
+  EXPECT_EQ(errorOf(""), no_header);
+  EXPECT_EQ(errorOf("# only a comment\n\n"), no_header);
   EXPECT_EQ(errorOf(kHeader), "samples.csv:1: a header but no samples");
   EXPECT_THROW(batch::readMeasuredSamples("/nonexistent/samples.csv", twoJoints()), IdentificationError);
+  EXPECT_THROW(batch::readMeasuredSamples("/", twoJoints()), IdentificationError);
 }
 
 TEST(MeasuredSamples, ColumnsForAFreeFlyerFollowTheCliLabels) {

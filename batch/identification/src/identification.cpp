@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 #include "robodiff/batch/identification_error.hpp"
 #include "robodiff/batch/urdf_inertials.hpp"
@@ -15,28 +14,13 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Times a phase into `times`, telling `on_phase` first.
-template <class F>
-auto timed(std::vector<PhaseTime>& times, const IdentificationOptions& options, const std::string& phase, F&& f) {
-  if (options.on_phase) options.on_phase(phase);
-  const auto start = std::chrono::steady_clock::now();
-  if constexpr (std::is_void_v<decltype(f())>) {
-    f();
-    times.push_back({phase, secondsSince(start)});
-  } else {
-    auto result = f();
-    times.push_back({phase, secondsSince(start)});
-    return result;
-  }
-}
+}  // namespace
 
-std::vector<std::string> baseNames(const IdentificationProblem& problem) {
+std::vector<std::string> baseParameterNames(const IdentificationProblem& problem) {
   std::vector<std::string> names;
   for (int k = 0; k < problem.base.size(); ++k) names.push_back(problem.base.name(k, problem.layout));
   return names;
 }
-
-}  // namespace
 
 double secondsSince(const std::chrono::steady_clock::time_point& start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -57,7 +41,7 @@ IdentificationProblem prepareIdentification(const Model& model, const std::strin
   problem.layout = parameterLayout(model);
   problem.prior = modelParameters(model);
   problem.scales = parameterScales(problem.prior);
-  problem.base = timed(problem.times, options, "base parameters",
+  problem.base = timedPhase(problem.times, options, "base parameters",
                        [&] { return computeBaseParameters(model, options.base); });
 
   const std::size_t n = samples.size();
@@ -70,10 +54,10 @@ IdentificationProblem prepareIdentification(const Model& model, const std::strin
                               std::to_string(problem.base.size()) + " base parameters; at least " +
                               std::to_string(needed) + " are needed, many more for a useful fit");
 
-  const BatchFunction regressor = timed(problem.times, options, "regressor function", [&] {
+  const BatchFunction regressor = timedPhase(problem.times, options, "regressor function", [&] {
     return openRegressor(model, urdf_text, floating_base, options.function);
   });
-  timed(problem.times, options, "stacking the regressor", [&] {
+  timedPhase(problem.times, options, "stacking the regressor", [&] {
     problem.fit = stackRegressor(regressor, model, samples, 0, fitted);
     problem.held_out = stackRegressor(regressor, model, samples, fitted, n);
   });
@@ -112,10 +96,10 @@ IdentificationResult resultFor(const IdentificationProblem& problem, const Eigen
     body.parameters = parameters.segment<10>(kParametersPerBody * j);
     body.prior = problem.prior.segment<10>(kParametersPerBody * j);
     body.std_errors.setConstant(kNaN);
-    body.consistency_problem = physicalConsistencyProblem(body.parameters);
-    if (!body.consistency_problem.empty())
+    body.validity = inertialValidity(body.parameters);
+    if (!body.validity.valid)
       result.warnings.push_back("body of link '" + problem.layout.bodies[static_cast<std::size_t>(j)].link +
-                                "' is not physically consistent: " + body.consistency_problem);
+                                "' is not physically consistent: " + body.validity.message);
     result.bodies.push_back(body);
   }
   return result;
@@ -126,11 +110,12 @@ IdentificationResult identifyLeastSquares(const IdentificationProblem& problem, 
   LeastSquaresOptions ls;
   ls.weighted = options.weighted;
   ls.excitation_tolerance = options.excitation_tolerance;
-  const LeastSquaresFit fit = timed(times, options, options.weighted ? "weighted least squares" : "least squares", [&] {
+  const std::string phase = options.weighted ? "weighted least squares" : "least squares";
+  const LeastSquaresFit fit = timedPhase(times, options, phase, [&] {
     return solveLeastSquares(problem.base.baseColumns(problem.fit.W), problem.fit.tau, problem.fit.nv, ls,
-                             baseNames(problem));
+                             baseParameterNames(problem));
   });
-  IdentificationResult result = timed(times, options, "report", [&] {
+  IdentificationResult result = timedPhase(times, options, "report", [&] {
     const Eigen::VectorXd parameters = problem.base.complete(fit.theta, problem.prior, problem.scales);
     IdentificationResult r = resultFor(problem, parameters, options.weighted ? "wls" : "ols");
     r.base_values = fit.theta;  // exact, not recomputed through B

@@ -77,8 +77,12 @@ nlohmann::json identificationJson(const IdentificationProblem& problem, const Id
                       {"prior", keyed(b.prior)},
                       {"std_errors", keyed(b.std_errors)},
                       {"inertial", {{"mass", number(inertial.mass)}, {"com", vector(inertial.com)}, {"inertia", I}}},
-                      {"physically_consistent", b.consistency_problem.empty()},
-                      {"consistency_problem", b.consistency_problem}});
+                      {"physically_consistent", b.validity.valid},
+                      {"consistency_problem", b.validity.message},
+                      {"validity", {{"principal_moments", vector(b.validity.principal_moments)},
+                                    {"triangle_margin", number(b.validity.triangle_margin)},
+                                    {"pseudo_inertia_min_eigenvalue",
+                                     number(b.validity.pseudo_inertia_min_eigenvalue)}}}});
   }
   out["bodies"] = bodies;
   out["residual_rms"] = {{"joints", jointLabels(problem.model)},
@@ -89,6 +93,19 @@ nlohmann::json identificationJson(const IdentificationProblem& problem, const Id
   out["joint_sigma"] = vector(result.joint_sigma);
   out["sigma"] = number(result.sigma);
   out["condition_number"] = number(result.condition_number);
+  if (const std::optional<SolverReport>& s = result.solver)
+    out["solver"] = {{"solver", s->solver},
+                     {"success", s->success},
+                     {"cancelled", s->cancelled},
+                     {"status", s->status},
+                     {"iterations", s->iterations},
+                     {"seconds", number(s->seconds)},
+                     {"setup_seconds", number(s->setup_seconds)},
+                     {"regularization", number(s->regularization)},
+                     {"weighting", s->weighting},
+                     {"residual_rms", number(s->residual_rms)},
+                     {"regularization_term", number(s->regularization_term)},
+                     {"projected_prior_bodies", s->projected_prior_bodies}};
   out["warnings"] = result.warnings;
   nlohmann::json times = nlohmann::json::array();
   for (const PhaseTime& t : result.times) times.push_back({{"phase", t.phase}, {"seconds", t.seconds}});

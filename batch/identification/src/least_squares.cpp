@@ -59,6 +59,12 @@ Solved fit(const Eigen::MatrixXd& W, const Eigen::VectorXd& tau, int nv, const E
 
 }  // namespace
 
+Eigen::VectorXd jointWeights(const Eigen::VectorXd& joint_sigma) {
+  const double largest = joint_sigma.size() > 0 ? joint_sigma.maxCoeff() : 0.0;
+  if (!(largest > 0) || !std::isfinite(largest)) return Eigen::VectorXd::Ones(joint_sigma.size());
+  return joint_sigma.cwiseMax(1e-9 * largest).cwiseInverse();
+}
+
 Eigen::VectorXd jointRms(const Eigen::VectorXd& residual, int nv) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(nv);
   const Eigen::Index n = nv > 0 ? residual.size() / nv : 0;
@@ -89,11 +95,8 @@ LeastSquaresFit solveLeastSquares(const Eigen::MatrixXd& W_base, const Eigen::Ve
   Solved chosen = std::move(ols);
   if (options.weighted) {
     out.weighted = true;
-    const double largest = out.joint_sigma.maxCoeff();
-    if (largest > 0) {
-      const Eigen::VectorXd floored = out.joint_sigma.cwiseMax(1e-9 * largest);
-      chosen = fit(W_base, tau, nv, floored.cwiseInverse(), options, base_names);
-    }
+    const Eigen::VectorXd weights = jointWeights(out.joint_sigma);
+    if (!weights.isOnes(0.0)) chosen = fit(W_base, tau, nv, weights, options, base_names);
   }
   out.theta = chosen.theta;
   out.covariance = chosen.covariance;

@@ -1,16 +1,15 @@
-// Measured samples: CSV reading (std::from_chars, no locale) and writing.
+// Measured samples: reading through batch/trajectory's CsvTable (the project's CSV
+// dialect and its messages), and writing.
 #include "robodiff/batch/measured_samples.hpp"
 
-#include <charconv>
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <map>
-#include <sstream>
-#include <string_view>
 #include <utility>
 
+#include "robodiff/batch/csv_table.hpp"
 #include "robodiff/batch/identification_error.hpp"
+#include "robodiff/batch/trajectory_error.hpp"
 
 namespace robodiff::batch {
 namespace {
@@ -41,39 +40,62 @@ std::vector<std::pair<std::string, Target>> neededColumns(const Model& model) {
   return out;
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
+// The samples of a parsed table: the needed columns found by name, every field of theirs
+// a finite number (CsvTable::number's TrajectoryError otherwise, turned into an
+// IdentificationError by the callers).
+MeasuredSamples samplesOf(const CsvTable& table, const Model& model) {
+  MeasuredSamples samples;
+  samples.source = table.source();
+  const std::string& source = table.source();
+  const std::size_t header_line = table.headerLine();
 
-std::string at(const std::string& source, std::size_t line) { return source + ":" + std::to_string(line) + ": "; }
-
-// Splits one line on ',' into `fields` (trimmed views).
-void split(std::string_view line, std::vector<std::string_view>& fields) {
-  fields.clear();
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
-    if (comma == std::string_view::npos) return;
-    start = comma + 1;
+  // Each needed column's place in the table; missing ones listed together.
+  std::vector<std::pair<std::size_t, Target>> used;  // (table column, target)
+  std::vector<bool> is_used(table.columns(), false);
+  std::string missing;
+  std::size_t missing_count = 0;
+  for (const auto& [name, target] : neededColumns(model)) {
+    const std::optional<std::size_t> c = table.column(name);
+    if (!c) {
+      missing += (missing.empty() ? "" : ", ") + name;
+      ++missing_count;
+      continue;
+    }
+    used.push_back({*c, target});
+    is_used[*c] = true;
   }
-}
+  const std::optional<std::size_t> time = table.column("t");
+  if (time) {
+    used.push_back({*time, {4, 0}});
+    is_used[*time] = true;
+  }
+  std::sort(used.begin(), used.end(), [](const auto& x, const auto& y) { return x.first < y.first; });  // file order
+  if (missing_count > 0)
+    throw IdentificationError(locationOf(source, header_line) + "the header lacks " + std::to_string(missing_count) +
+                              (missing_count == 1 ? " column " : " columns ") + "of robot '" + model.name + "': " +
+                              missing + " (expected q_, v_, a_ and tau_ columns per joint)");
+  for (std::size_t c = 0; c < table.columns(); ++c)
+    if (!is_used[c]) samples.ignored_columns.push_back(table.header()[c]);
+  std::sort(samples.ignored_columns.begin(), samples.ignored_columns.end());
 
-// A field as a finite double, or a message saying why not.
-bool parseNumber(std::string_view text, double& value, std::string& why) {
-  if (text.empty()) return why = "is empty", false;
-  std::string_view digits = text;
-  if (digits.front() == '+') digits.remove_prefix(1);  // from_chars takes no '+'
-  const char* end = digits.data() + digits.size();
-  auto [ptr, ec] = std::from_chars(digits.data(), end, value, std::chars_format::general);
-  if (digits.empty() || (digits.front() == '-' && text.front() == '+') || ec == std::errc::invalid_argument ||
-      ptr != end)
-    return why = "is not a number", false;
-  if (ec == std::errc::result_out_of_range) return why = "is out of the range of a double", false;
-  if (!std::isfinite(value)) return why = "is not finite", false;
-  return true;
+  const std::size_t n = table.rows();
+  if (n == 0) throw IdentificationError(locationOf(source, header_line) + "a header but no samples");
+  // Column k of `all` is sample k: q, v, a, tau, t.
+  const int offset[] = {0, model.nq, model.nq + model.nv, model.nq + 2 * model.nv, model.nq + 3 * model.nv};
+  Eigen::MatrixXd all(offset[4] + 1, static_cast<Eigen::Index>(n));
+  all.setZero();
+  samples.lines.resize(n);
+  for (std::size_t row = 0; row < n; ++row) {
+    for (const auto& [c, target] : used)
+      all(offset[target.quantity] + target.row, static_cast<Eigen::Index>(row)) = table.number(row, c);
+    samples.lines[row] = table.lineOf(row);
+  }
+  samples.q = all.topRows(model.nq);
+  samples.v = all.middleRows(offset[1], model.nv);
+  samples.a = all.middleRows(offset[2], model.nv);
+  samples.tau = all.middleRows(offset[3], model.nv);
+  if (time) samples.t = all.row(offset[4]).transpose();
+  return samples;
 }
 
 }  // namespace
@@ -86,115 +108,22 @@ std::vector<std::string> sampleColumns(const Model& model, bool with_time) {
 }
 
 MeasuredSamples parseMeasuredSamples(const std::string& text, const Model& model, const std::string& source) {
-  MeasuredSamples samples;
-  samples.source = source;
-  const std::vector<std::pair<std::string, Target>> needed = neededColumns(model);
-
-  std::vector<Target> targets;          // per header column; quantity -1: ignored
-  std::vector<std::string> names;       // per header column
-  std::size_t header_line = 0;
-  std::vector<double> values;           // per sample: q, v, a, tau, t
-  const std::size_t per_sample = static_cast<std::size_t>(model.nq + 3 * model.nv + 1);
-  const int quantity_offset[] = {0, model.nq, model.nq + model.nv, model.nq + 2 * model.nv,
-                                 model.nq + 3 * model.nv};
-  bool has_time = false;
-  std::vector<std::string_view> fields;
-  std::string why;
-
-  std::size_t line_number = 0, pos = 0;
-  while (pos < text.size()) {
-    std::size_t eol = text.find('\n', pos);
-    if (eol == std::string::npos) eol = text.size();
-    std::string_view line(text.data() + pos, eol - pos);
-    pos = eol + 1;
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const std::string_view content = trim(line);
-    if (content.empty() || content.front() == '#') continue;
-    split(line, fields);
-
-    if (header_line == 0) {  // the header: map names to targets
-      header_line = line_number;
-      std::map<std::string, std::size_t> index;
-      for (std::size_t c = 0; c < fields.size(); ++c) {
-        std::string_view name = fields[c];
-        if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
-        if (name.empty())
-          throw IdentificationError(at(source, line_number) + "column " + std::to_string(c + 1) +
-                                    " of the header has no name");
-        names.emplace_back(name);
-        if (!index.emplace(std::string(name), c).second)
-          throw IdentificationError(at(source, line_number) + "column " + std::string(name) +
-                                    " appears twice in the header");
-      }
-      targets.assign(fields.size(), Target{});
-      std::string missing;
-      std::size_t missing_count = 0;
-      for (const auto& [name, target] : needed) {
-        auto it = index.find(name);
-        if (it == index.end()) {
-          missing += (missing.empty() ? "" : ", ") + name;
-          ++missing_count;
-          continue;
-        }
-        targets[it->second] = target;
-        index.erase(it);
-      }
-      if (auto it = index.find("t"); it != index.end()) {
-        targets[it->second] = {4, 0};
-        has_time = true;
-        index.erase(it);
-      }
-      if (missing_count > 0)
-        throw IdentificationError(at(source, line_number) + "the header lacks " + std::to_string(missing_count) +
-                                  (missing_count == 1 ? " column " : " columns ") + "of robot '" + model.name +
-                                  "': " + missing + " (expected q_, v_, a_ and tau_ columns per joint)");
-      for (const auto& [name, c] : index) samples.ignored_columns.push_back(name);
-      continue;
-    }
-
-    if (fields.size() != targets.size())
-      throw IdentificationError(at(source, line_number) + std::to_string(fields.size()) +
-                                (fields.size() == 1 ? " field" : " fields") + ", the header has " +
-                                std::to_string(targets.size()));
-    const std::size_t base = values.size();
-    values.resize(base + per_sample, 0.0);
-    for (std::size_t c = 0; c < fields.size(); ++c) {
-      const Target& target = targets[c];
-      if (target.quantity < 0) continue;  // an ignored column may hold anything
-      double value = 0;
-      if (!parseNumber(fields[c], value, why)) {
-        throw IdentificationError(at(source, line_number) + "column " + names[c] + ": '" + std::string(fields[c]) +
-                                  "' " + why);
-      }
-      values[base + static_cast<std::size_t>(quantity_offset[target.quantity] + target.row)] = value;
-    }
-    samples.lines.push_back(line_number);
+  try {
+    return samplesOf(CsvTable::parse(text, source), model);
+  } catch (const TrajectoryError& e) {  // the table's errors, as this layer's
+    throw IdentificationError(e.what());
   }
-  if (header_line == 0) throw IdentificationError(source + ": no header row (the file has no data)");
-  const std::size_t n = samples.lines.size();
-  if (n == 0) throw IdentificationError(at(source, header_line) + "a header but no samples");
-
-  Eigen::Map<const Eigen::MatrixXd> all(values.data(), static_cast<Eigen::Index>(per_sample),
-                                        static_cast<Eigen::Index>(n));
-  samples.q = all.topRows(model.nq);
-  samples.v = all.middleRows(quantity_offset[1], model.nv);
-  samples.a = all.middleRows(quantity_offset[2], model.nv);
-  samples.tau = all.middleRows(quantity_offset[3], model.nv);
-  if (has_time) samples.t = all.row(quantity_offset[4]).transpose();
-  return samples;
 }
 
 MeasuredSamples readMeasuredSamples(const std::filesystem::path& path, const Model& model) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw IdentificationError(path.string() + ": cannot read samples: it is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IdentificationError(path.string() + ": cannot open the samples file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw IdentificationError(path.string() + ": cannot read the samples file");
-  return parseMeasuredSamples(text.str(), model, path.string());
+  try {
+    return samplesOf(CsvTable::readFile(path), model);
+  } catch (const TrajectoryError& e) {
+    throw IdentificationError(e.what());
+  }
 }
 
 std::string formatMeasuredSamples(const MeasuredSamples& samples, const Model& model) {

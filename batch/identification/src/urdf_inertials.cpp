@@ -7,7 +7,6 @@
 #include <map>
 #include <set>
 
-#include <Eigen/Eigenvalues>
 #include <tinyxml.h>
 
 #include "robodiff/batch/identification_error.hpp"
@@ -23,10 +22,16 @@ std::string number(double x) {
   return buffer;
 }
 
-std::string shortNumber(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
+// What rounding may take off a principal moment or a triangle margin (kg m^2).
+double roundingTolerance(const Eigen::Matrix<double, 10, 1>& p) {
+  return p.allFinite() ? 1e-12 * p.tail<6>().cwiseAbs().maxCoeff() : 0.0;
+}
+
+// Whether the URDF loader takes a body that is not valid: it refuses a negative mass and an
+// indefinite inertia, and a first moment needs a mass to become a centre of mass.
+bool loaderAccepts(const Eigen::Matrix<double, 10, 1>& p, const BodyValidity& v) {
+  return p.allFinite() && p[0] >= 0 && (p[0] > 0 || p.segment<3>(1).isZero(0.0)) &&
+         v.principal_moments[0] >= -roundingTolerance(p);
 }
 
 // A replacement of text [offset, offset + length).
@@ -161,21 +166,8 @@ BodyInertial inertialFromParameters(const Eigen::Matrix<double, 10, 1>& p) {
   return b;
 }
 
-std::string physicalConsistencyProblem(const Eigen::Matrix<double, 10, 1>& p) {
-  if (p[0] < 0) return "mass " + shortNumber(p[0]) + " kg is negative";
-  if (p[0] == 0 && !p.segment<3>(1).isZero(0.0))
-    return "mass 0 with a first moment (" + shortNumber(p[1]) + ", " + shortNumber(p[2]) + ", " + shortNumber(p[3]) +
-           ") kg m";
-  const BodyInertial b = inertialFromParameters(p);
-  const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(b.inertia).eigenvalues();
-  const double scale = std::max(1e-300, b.inertia.cwiseAbs().maxCoeff());
-  const std::string listed = shortNumber(moments[0]) + ", " + shortNumber(moments[1]) + ", " + shortNumber(moments[2]);
-  if (moments[0] < -1e-12 * scale)
-    return "the inertia about the centre of mass is not positive semi-definite (principal moments " + listed +
-           " kg m^2)";
-  if (moments[2] > moments[0] + moments[1] + 1e-12 * scale)
-    return "the principal moments " + listed + " kg m^2 violate the triangle inequality";
-  return "";
+BodyValidity inertialValidity(const Eigen::Matrix<double, 10, 1>& p) {
+  return checkBodyValidity(p, roundingTolerance(p));
 }
 
 UrdfRewrite rewriteUrdfInertials(const std::string& urdf_text, const std::string& source, const Model& model,
@@ -218,11 +210,10 @@ UrdfRewrite rewriteUrdfInertials(const std::string& urdf_text, const std::string
     if (auto c = carrier.find(name); c != carrier.end()) {
       seen.insert(name);
       const Eigen::Matrix<double, 10, 1> p = parameters.segment<10>(kParametersPerBody * c->second);
-      if (p[0] < 0 || (p[0] == 0 && !p.segment<3>(1).isZero(0.0)) ||
-          physicalConsistencyProblem(p).find("positive semi-definite") != std::string::npos)
-        rw.fail(link, "link '" + name + "': the identified inertial cannot be written: " +
-                          physicalConsistencyProblem(p) +
-                          " (least squares does not enforce physical consistency; --physical will)");
+      const BodyValidity validity = inertialValidity(p);
+      if (!validity.valid && !loaderAccepts(p, validity))
+        rw.fail(link, "link '" + name + "': the identified inertial cannot be written: " + validity.message +
+                          " (least squares does not enforce physical consistency; --physical does)");
       const BodyInertial b = inertialFromParameters(p);
       if (inertial) {
         const std::size_t at = rw.offsetOf(inertial);

@@ -7,8 +7,9 @@
 //                          over each (W, tau);
 //   identifyLeastSquares   OLS or WLS on the base regressor (least_squares.hpp);
 //   resultFor              the common report for any full parameter vector, so that
-//                          other estimators (the physically consistent one, with Ipopt)
-//                          take the same problem and give the same kind of result.
+//                          other estimators (the physically consistent one with Ipopt,
+//                          physical_identification.hpp) take the same problem and give
+//                          the same kind of result.
 //
 // Hold-out: the LAST round(holdout * N) samples are held out (not fitted): measured
 // samples are a time series, and a contiguous final stretch tests the model on motion it
@@ -18,14 +19,17 @@
 // URDF's with the identified base parameters (BaseParameters::complete), distance measured
 // in relative terms (each parameter divided by its size in the URDF, parameterScales):
 // what the data cannot see keeps the URDF's values, so the result is a complete, usable
-// set. (Least squares does not make it physically consistent; each body is checked and
-// reported.) A standard parameter's standard error is given only when the base parameters
-// determine it on its own (BaseParameters::combinationFor); NaN otherwise.
+// set. (Least squares does not make it physically consistent; each body is checked, with
+// batch/optimization's checkBodyValidity through inertialValidity, and reported.) A
+// standard parameter's standard error is given only when the base parameters determine it
+// on its own (BaseParameters::combinationFor); NaN otherwise.
 
 #include <chrono>
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -35,6 +39,7 @@
 #include "robodiff/batch/least_squares.hpp"
 #include "robodiff/batch/measured_samples.hpp"
 #include "robodiff/batch/parameter_layout.hpp"
+#include "robodiff/batch/physical_validity.hpp"
 #include "robodiff/batch/regressor_stack.hpp"
 
 namespace robodiff::batch {
@@ -78,11 +83,27 @@ IdentificationProblem prepareIdentification(const Model& model, const std::strin
 // One body's identified inertia.
 struct BodyResult {
   Eigen::Matrix<double, 10, 1> parameters, prior, std_errors;  // std_errors NaN where undefined
-  std::string consistency_problem;  // empty: physically consistent (urdf_inertials.hpp)
+  BodyValidity validity;  // physical consistency (inertialValidity, urdf_inertials.hpp); message empty when valid
+};
+
+// What an iterative estimator's solver did (the physically consistent fit's Ipopt run).
+struct SolverReport {
+  std::string solver;           // "ipopt"
+  bool success = false;         // converged (to tolerance or Ipopt's acceptable level)
+  bool cancelled = false;
+  std::string status;           // e.g. "Solve_Succeeded"
+  int iterations = 0;
+  double seconds = 0;           // the solve
+  double setup_seconds = 0;     // building the program
+  double regularization = 0;    // lambda, the pull towards the URDF's values
+  std::string weighting;        // "ols" (every row 1) or "per-joint noise" (1/sigma_j^2 from an OLS pass)
+  double residual_rms = 0;      // of the (weighted) fitted rows
+  double regularization_term = 0;            // in the units of the weighted squared residual
+  std::vector<int> projected_prior_bodies;   // prior bodies moved into the valid set to start from
 };
 
 struct IdentificationResult {
-  std::string method;                   // "ols", "wls" (later "physical")
+  std::string method;                   // "ols", "wls" or "physical"
   Eigen::VectorXd base_values;          // r
   Eigen::VectorXd base_prior;           // r, the URDF's
   Eigen::VectorXd base_std_errors;      // r (NaN when the method gives none)
@@ -97,6 +118,7 @@ struct IdentificationResult {
   Eigen::VectorXd rms_prior_fit, rms_prior_held_out;  // the URDF's, for comparison
   std::vector<std::string> warnings;
   std::vector<PhaseTime> times;         // the problem's phases, then the estimator's
+  std::optional<SolverReport> solver;   // iterative estimators only
 };
 
 // OLS (or WLS with options.weighted). Throws IdentificationError when the samples do not
@@ -105,11 +127,30 @@ IdentificationResult identifyLeastSquares(const IdentificationProblem& problem, 
 
 // The report for a complete standard parameter vector found by any estimator: base
 // values, residual RMS per joint on fit and held-out data, per-body values and
-// consistency. Statistics it cannot know (covariance, standard errors) are left NaN.
+// validity. Statistics it cannot know (covariance, standard errors) are left NaN.
 IdentificationResult resultFor(const IdentificationProblem& problem, const Eigen::VectorXd& parameters,
                                const std::string& method);
 
 // The wall clock, for the phase times.
 double secondsSince(const std::chrono::steady_clock::time_point& start);
+
+// Runs `f` as phase `phase`: tells options.on_phase, appends its wall time to `times`, and
+// returns what f returns.
+template <class F>
+auto timedPhase(std::vector<PhaseTime>& times, const IdentificationOptions& options, const std::string& phase, F&& f) {
+  if (options.on_phase) options.on_phase(phase);
+  const auto start = std::chrono::steady_clock::now();
+  if constexpr (std::is_void_v<decltype(f())>) {
+    f();
+    times.push_back({phase, secondsSince(start)});
+  } else {
+    auto result = f();
+    times.push_back({phase, secondsSince(start)});
+    return result;
+  }
+}
+
+// The base parameters' names (each its leading standard parameter), for messages.
+std::vector<std::string> baseParameterNames(const IdentificationProblem& problem);
 
 }  // namespace robodiff::batch

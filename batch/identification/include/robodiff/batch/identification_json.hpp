@@ -6,10 +6,13 @@
 //     with base = pi[independent] + K pi[dependent],
 //   bodies: [{joint, link, merged_links, parameters, prior, std_errors (objects keyed
 //     m, mcx, ..., Izz), inertial {mass, com, inertia about the com}, physically_consistent,
-//     consistency_problem}],
+//     consistency_problem, validity {principal_moments, triangle_margin,
+//     pseudo_inertia_min_eigenvalue}}],
 //   residual_rms: {joints, fit, held_out, prior_fit, prior_held_out} (N m or N per joint),
 //   joint_sigma, sigma, condition_number, no_effect, warnings, times [{phase, seconds}],
-//   ignored_columns.
+//   ignored_columns; for the physically consistent fit also solver {solver, success,
+//   cancelled, status, iterations, seconds, setup_seconds, regularization, weighting,
+//   residual_rms, regularization_term, projected_prior_bodies}.
 // Numbers that are not defined (NaN) are null.
 
 #include <nlohmann/json.hpp>

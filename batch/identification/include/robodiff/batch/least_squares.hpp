@@ -47,6 +47,10 @@ LeastSquaresFit solveLeastSquares(const Eigen::MatrixXd& W_base, const Eigen::Ve
                                   const LeastSquaresOptions& options = {},
                                   const std::vector<std::string>& base_names = {});
 
+// The row weight of each joint, 1 / sigma_j, from each joint's noise: a joint with sigma_j = 0
+// is floored at 1e-9 * the largest sigma_j; all 1 when every sigma_j is 0 (or not finite).
+Eigen::VectorXd jointWeights(const Eigen::VectorXd& joint_sigma);
+
 // Root mean square of `residual` per joint (rows of joint j at k*nv + j): nv values.
 Eigen::VectorXd jointRms(const Eigen::VectorXd& residual, int nv);
 

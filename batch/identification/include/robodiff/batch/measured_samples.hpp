@@ -7,14 +7,12 @@
 // moving joint, and an optional t (time, seconds). A free-flyer root joint has one column
 // per coordinate: q_<joint>.x .y .z .qx .qy .qz .qw and v_/a_/tau_<joint>.vx .vy .vz .wx
 // .wy .wz (as the CLI labels them). Columns may come in any order; other columns are
-// ignored (and listed). Accepted: '\n' or "\r\n" line ends, blank lines and lines starting
-// with '#' (skipped), spaces and tabs around fields, header names in double quotes.
-// Every field must be a finite number (nan and inf are rejected). Line numbers in
+// ignored (and listed, by name). The file is read with batch/trajectory's CsvTable, the
+// project's one CSV reader: '\n' or "\r\n" line ends, blank lines and lines starting with
+// '#' (skipped), spaces and tabs around fields, header names in double quotes. Every field
+// of a used column must be a finite number (nan and inf are rejected). Line numbers in
 // messages are the file's physical lines, 1-based (the header is line 1 when nothing
 // precedes it).
-//
-// (batch/trajectory has a CSV reader of the same dialect, CsvTable; this one is kept
-// self-contained until the two are merged.)
 
 #include <cstddef>
 #include <filesystem>
@@ -45,7 +43,8 @@ std::vector<std::string> sampleColumns(const Model& model, bool with_time = fals
 
 // Parses CSV text. Throws IdentificationError "source:line: ..." naming the column and the
 // text: a missing header, missing columns (all listed), a repeated column, a row with the
-// wrong number of fields, a field that is not a finite number, no samples at all.
+// wrong number of fields, a field that is not a finite number, no samples at all (the
+// table's own errors are CsvTable's messages, as IdentificationErrors).
 MeasuredSamples parseMeasuredSamples(const std::string& text, const Model& model, const std::string& source = "<string>");
 MeasuredSamples readMeasuredSamples(const std::filesystem::path& path, const Model& model);
 

@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 
+#include "robodiff/batch/physical_validity.hpp"
 #include "robodiff/model/model.hpp"
 
 namespace robodiff::batch {
@@ -32,11 +33,12 @@ struct BodyInertial {
 // The inertial of one body's 10 standard parameters (mass <= 0: com 0, inertia I_o).
 BodyInertial inertialFromParameters(const Eigen::Matrix<double, 10, 1>& p);
 
-// Empty when the parameters are physically consistent: mass > 0 (or everything 0), the
-// inertia about the centre of mass positive semi-definite and its principal moments
-// satisfying the triangle inequality (each at most the sum of the other two); otherwise
-// what is wrong, with the values.
-std::string physicalConsistencyProblem(const Eigen::Matrix<double, 10, 1>& p);
+// Whether one body's parameters are physically consistent: batch/optimization's
+// checkBodyValidity (mass > 0, the inertia about the centre of mass positive definite, its
+// principal moments within the triangle inequalities), with rounding allowed: moments and
+// triangle margins down to -1e-12 times the body's largest inertia entry count, so that a
+// body on the boundary (a thin rod: principal moments 0, L, L) is consistent.
+BodyValidity inertialValidity(const Eigen::Matrix<double, 10, 1>& p);
 
 struct UrdfRewrite {
   std::string text;                  // the new URDF
@@ -46,8 +48,9 @@ struct UrdfRewrite {
 
 // The URDF `urdf_text` (from which `model` was loaded) with the inertials of the standard
 // parameter vector `parameters` (10 per joint). Throws IdentificationError naming the link
-// when a body is not physically consistent (the URDF loader would reject a negative mass
-// or an indefinite inertia), or when the text cannot be parsed.
+// when a body cannot be written as one the URDF loader accepts (a negative mass, a first
+// moment without mass, an indefinite inertia about the centre of mass; a body only breaking
+// the triangle inequality is written), or when the text cannot be parsed.
 UrdfRewrite rewriteUrdfInertials(const std::string& urdf_text, const std::string& source, const Model& model,
                                  const Eigen::VectorXd& parameters);
 
