@@ -69,14 +69,6 @@ Eigen::VectorXd parseConfiguration(const std::string& text, const std::string& f
   return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
 
-// The centre of every joint's position limits (0 where it has none): q0's default.
-Eigen::VectorXd centreOfLimits(const Model& model) {
-  const Eigen::VectorXd lo = model.lowerPositionLimit(), hi = model.upperPositionLimit();
-  Eigen::VectorXd q(model.nq);
-  for (int i = 0; i < model.nq; ++i) q[i] = std::isfinite(lo[i]) && std::isfinite(hi[i]) ? (lo[i] + hi[i]) / 2 : 0.0;
-  return q;
-}
-
 nlohmann::json costJson(const batch::TrajectoryCost& c) {
   return {{"total", c.total}, {"smoothness", c.smoothness}, {"torque", c.torque}};
 }
@@ -115,7 +107,7 @@ void run(const TrajoptArgs& args) {
   options.duration = args.duration;
   options.torque_weight = args.torque_weight;
   options.smoothness_weight = args.smoothness_weight;
-  options.q0 = args.q0.empty() ? centreOfLimits(model) : parseConfiguration(args.q0, "--q0");
+  options.q0 = args.q0.empty() ? batch::centreOfLimits(model) : parseConfiguration(args.q0, "--q0");
   options.qT = parseConfiguration(args.qT, "--qT");
   options.velocity_limits = !args.no_velocity_limits;
   options.torque_limits = args.torque_limits;

@@ -15,6 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/batch/measured_samples.hpp"
+#include "robodiff/batch/physical_validity.hpp"
+#include "robodiff/batch/synthetic_samples.hpp"
 #include "robodiff/batch/trajectory_output.hpp"
 #include "robodiff/cache/job_index.hpp"
 #include "robodiffd/service_fixture.hpp"
@@ -323,6 +326,66 @@ TEST_P(Jobs, AJobACrashedServerLeftRunningIsFailedByTheNext) {
   EXPECT_EQ(info.state, rpc::JobState::Failed);
   EXPECT_NE(info.error.find("robodiffd stopped"), std::string::npos) << info.error;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "cache" / "jobs" / (id + ".partial")));
+}
+
+// The other two kinds through the server: identification (the physically consistent fit)
+// writes a report and a URDF whose bodies are all valid and close to the truth's
+// torques; trajectory optimisation writes a trajectory from q0 to qT within the limits.
+TEST_P(Jobs, IdentifyAndTrajoptJobs) {
+  startServer();
+  auto c = connect();
+  const Model truth = batch::perturbInertias(model_, 0.2, 5);
+  batch::SyntheticOptions synthetic;
+  synthetic.samples = 400;
+  synthetic.noise = 0.05;
+  batch::writeMeasuredSamples(dir_ / "samples.csv", batch::syntheticSamples(truth, synthetic), model_);
+  const json identify = {{"urdf", (sourceDir() / "examples/robots/arm7.urdf").string()},
+                         {"data", (dir_ / "samples.csv").string()},
+                         {"holdout", 0.25},
+                         {"physical", true},
+                         {"backend", "interpreted"}};
+  const std::string id = submit(*c, "identify", identify);
+  const rpc::JobInfo done = waitFinal(*c, id);
+  ASSERT_EQ(done.state, rpc::JobState::Succeeded) << done.error << "\n" << server_->log();
+  rpc::JobResultReply result;
+  ASSERT_TRUE(c->jobResult(rpc::JobResultRequest{id}, result).ok());
+  const json summary = json::parse(result.result_json);
+  EXPECT_EQ(summary["method"], "physical");
+  EXPECT_EQ(summary["urdf"], "identified.urdf");
+  EXPECT_LT(summary["worst_held_out_rms"].get<double>(), 1.5 * 0.05) << summary.dump();
+  const Model identified = loadUrdfFile((std::filesystem::path(result.result_dir) / "identified.urdf").string());
+  for (const auto& body : identified.bodies)
+    EXPECT_TRUE(batch::checkBodyValidity(body.parameters()).valid);
+  EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(result.result_dir) / "identification.json"));
+
+  json trajopt = {{"urdf", (sourceDir() / "examples/robots/arm7.urdf").string()},
+                  {"knots", 12},
+                  {"duration", 1.0},
+                  {"backend", "interpreted"}};
+  const Eigen::VectorXd lo = model_.lowerPositionLimit(), hi = model_.upperPositionLimit();
+  std::vector<double> qT;
+  for (int i = 0; i < model_.nq; ++i) qT.push_back(lo[i] + 0.7 * (hi[i] - lo[i]));
+  trajopt["qT"] = qT;
+  const std::string topt = submit(*c, "trajopt", trajopt);
+  const rpc::JobInfo optimised = waitFinal(*c, topt);
+  ASSERT_EQ(optimised.state, rpc::JobState::Succeeded) << optimised.error;
+  ASSERT_TRUE(c->jobResult(rpc::JobResultRequest{topt}, result).ok());
+  const json topt_summary = json::parse(result.result_json);
+  EXPECT_EQ(topt_summary["status"], "Solve_Succeeded");
+  EXPECT_LT(topt_summary["cost"]["total"].get<double>(), topt_summary["initial_cost"].get<double>());
+  EXPECT_LT(topt_summary["violation"]["position"].get<double>(), 1e-6);
+  std::ifstream csv(std::filesystem::path(result.result_dir) / "trajectory.csv");
+  int lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  EXPECT_EQ(lines, 1 + 12);
+
+  // A qT outside the limits is refused at submission, naming the joint.
+  qT[2] = hi[2] + 1;
+  trajopt["qT"] = qT;
+  Status s;
+  submit(*c, "trajopt", trajopt, &s);
+  EXPECT_EQ(s.code, StatusCode::InvalidArgument);
+  EXPECT_NE(s.message.find("outside its position limits"), std::string::npos) << s.message;
 }
 
 INSTANTIATE_TEST_SUITE_P(Transports, Jobs, ::testing::Values("iceoryx", "dds"),

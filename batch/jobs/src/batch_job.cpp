@@ -15,6 +15,8 @@ struct Kind {
 const std::vector<Kind>& kinds() {
   static const std::vector<Kind> table = {
       {"trajectory", validateTrajectoryParams, runTrajectoryKind},
+      {"identify", validateIdentifyParams, runIdentifyKind},
+      {"trajopt", validateTrajoptParams, runTrajoptKind},
   };
   return table;
 }

@@ -10,4 +10,12 @@ namespace robodiff::batch {
 void validateTrajectoryParams(const nlohmann::json& params);
 nlohmann::json runTrajectoryKind(const nlohmann::json& params, const BatchJobContext& context);
 
+// trajopt_job.cpp: a trajectory optimised with Ipopt.
+void validateTrajoptParams(const nlohmann::json& params);
+nlohmann::json runTrajoptKind(const nlohmann::json& params, const BatchJobContext& context);
+
+// identify_job.cpp: inertial parameters from measured samples.
+void validateIdentifyParams(const nlohmann::json& params);
+nlohmann::json runIdentifyKind(const nlohmann::json& params, const BatchJobContext& context);
+
 }  // namespace robodiff::batch

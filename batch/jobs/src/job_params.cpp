@@ -62,6 +62,15 @@ std::string resultFileName(const nlohmann::json& p, const char* field, const std
   return name;
 }
 
+Backend backend(const nlohmann::json& p) {
+  const std::string text = optionalString(p, "backend").value_or("compiled");
+  try {
+    return parseBackend(text);
+  } catch (const std::invalid_argument& e) {
+    throw JobParamsError(std::string("backend: ") + e.what());
+  }
+}
+
 void checkRobotFields(const nlohmann::json& p) {
   if (p.contains("urdf_text")) {
     requiredString(p, "urdf_text");

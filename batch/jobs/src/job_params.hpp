@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/batch/batch_function.hpp"
 #include "robodiff/batch/batch_job.hpp"
 #include "robodiff/functions/function_spec.hpp"
 #include "robodiff/model/model.hpp"
@@ -21,6 +22,9 @@ double optionalNumber(const nlohmann::json& p, const char* field, double fallbac
 std::filesystem::path existingFile(const nlohmann::json& p, const char* field);
 // A plain file name for a result inside the job's directory (no '/', not "." or "..").
 std::string resultFileName(const nlohmann::json& p, const char* field, const std::string& fallback);
+
+// "backend": compiled (the default) or interpreted; JobParamsError otherwise.
+Backend backend(const nlohmann::json& p);
 
 // The robot: "urdf" (a path) or "urdf_text", and "floating_base".
 struct Robot {

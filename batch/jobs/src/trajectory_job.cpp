@@ -26,13 +26,7 @@ void validateTrajectoryParams(const nlohmann::json& p) {
       throw JobParamsError(std::string("format: ") + e.what());
     }
   }
-  if (const auto backend = params::optionalString(p, "backend")) {
-    try {
-      parseBackend(*backend);
-    } catch (const std::invalid_argument& e) {
-      throw JobParamsError(std::string("backend: ") + e.what());
-    }
-  }
+  params::backend(p);
 }
 
 nlohmann::json runTrajectoryKind(const nlohmann::json& p, const BatchJobContext& context) {
@@ -42,7 +36,7 @@ nlohmann::json runTrajectoryKind(const nlohmann::json& p, const BatchJobContext&
   const params::Robot robot = params::robot(p);
   const FunctionSpec spec = params::spec(p);
   BatchFunctionOptions options;
-  options.backend = parseBackend(params::optionalString(p, "backend").value_or("compiled"));
+  options.backend = params::backend(p);
   options.cache_dir = context.cache_dir;
   options.on_progress = [&](const std::string& what) { progress(0.0, "function " + what); };
   progress(0.0, "building the function");

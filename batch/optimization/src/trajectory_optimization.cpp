@@ -121,4 +121,11 @@ TrajectoryOptimizationResult optimizeTrajectory(const Model& model, const std::s
   return result;
 }
 
+Eigen::VectorXd centreOfLimits(const Model& model) {
+  const Eigen::VectorXd lo = model.lowerPositionLimit(), hi = model.upperPositionLimit();
+  Eigen::VectorXd q(model.nq);
+  for (int i = 0; i < model.nq; ++i) q[i] = std::isfinite(lo[i]) && std::isfinite(hi[i]) ? (lo[i] + hi[i]) / 2 : 0.0;
+  return q;
+}
+
 }  // namespace robodiff::batch

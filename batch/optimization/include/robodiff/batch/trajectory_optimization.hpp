@@ -88,6 +88,10 @@ struct TrajectoryOptimizationResult {
   int second_order_evaluations = 0;  // knots' weighted Hessians, once per Hessian
 };
 
+// The centre of every joint's position limits (0 where it has none): q0's default in the
+// CLI and in jobs (a neutral pose may lie outside the limits, as the Panda's joint 4 does).
+Eigen::VectorXd centreOfLimits(const Model& model);
+
 // Throws std::invalid_argument naming the field and value when the options do not fit
 // the model (a floating base, T < 3, a duration <= 0, negative weights, q0 or qT of the
 // wrong size or outside a joint's limits, an initial guess of the wrong shape or ends).
