@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cache_location.hpp"
+#include "batch_function_options.hpp"
 #include "commands.hpp"
 #include "function_options.hpp"
 #include "output_table.hpp"
@@ -31,11 +31,11 @@ namespace {
 
 struct IdentifyArgs {
   RobotArgs robot;
-  std::string data, out_urdf, backend = "compiled", cache_dir, compiler;
+  std::string data, out_urdf;
+  BatchFunctionArgs function;
   double holdout = 0.0;
   double regularization = batch::PhysicalFitOptions{}.regularization;
   bool weighted = false, physical = false, json = false;
-  unsigned threads = 0;
 };
 
 std::string fixed(double x, const char* format = "%.6g") {
@@ -179,10 +179,7 @@ void identify(const IdentifyArgs& args) {
   batch::IdentificationOptions options;
   options.holdout = args.holdout;
   options.weighted = args.weighted;
-  options.function.backend = batch::parseBackend(args.backend);
-  options.function.cache_dir = cacheDirFor(args.cache_dir);
-  options.function.compiler = args.compiler;
-  options.function.threads = args.threads;
+  options.function = batchFunctionOptions(args.function);
   if (!args.json)
     options.function.on_progress = [](const std::string& what) {
       if (what == "building") std::cerr << "building the regressor (once per robot; cached afterwards)...\n";
@@ -208,7 +205,7 @@ void identify(const IdentifyArgs& args) {
   if (args.json) {
     nlohmann::json out = batch::identificationJson(problem, result);
     out["total_seconds"] = total;
-    out["backend"] = args.backend;
+    out["backend"] = batch::toString(options.function.backend);
     if (!args.out_urdf.empty()) {
       out["out_urdf"] = {{"path", args.out_urdf}, {"written", urdf.rewrite.has_value()}};
       if (urdf.rewrite) {
@@ -264,16 +261,7 @@ void addIdentifyCommand(CLI::App& app) {
   cmd->add_flag("--json", args->json,
                 "Print the result as JSON (base parameters, bodies and their validity, residuals, times; Ipopt's run "
                 "with --physical)");
-  cmd->add_option("--backend", args->backend,
-                  "How the regressor runs: compiled (default: generated C from the cache, built once per robot) or "
-                  "interpreted (no compiler; slower per sample)")
-      ->check(CLI::IsMember({"compiled", "generated", "interpreted"}));
-  cmd->add_option("--cache", args->cache_dir,
-                  "Cache directory of compiled functions (default $ROBODIFF_CACHE_DIR, else $XDG_CACHE_HOME/robodiff, "
-                  "else ~/.cache/robodiff)")
-      ->type_name("DIR");
-  cmd->add_option("--compiler", args->compiler, "C compiler for the compiled regressor (default $CC, else cc)");
-  cmd->add_option("--threads", args->threads, "Threads evaluating the regressor (default: all cores)");
+  addBatchFunctionOptions(*cmd, args->function, "sample (the regressor)");
   cmd->footer(
       "Base parameters are the combinations of standard parameters (per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, "
       "Iyz, Izz about the joint frame's origin) that joint torques determine, found by QR with column pivoting. "

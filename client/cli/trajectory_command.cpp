@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cache_location.hpp"
+#include "batch_function_options.hpp"
 #include "commands.hpp"
 #include "function_options.hpp"
 #include "human_units.hpp"
@@ -33,8 +33,8 @@ constexpr int kExitInterrupted = 130;  // as a shell reports a command stopped b
 
 struct TrajectoryArgs {
   RobotArgs robot;
-  std::string spec, data, out, format, backend = "compiled", cache_dir, compiler;
-  unsigned threads = 0;
+  std::string spec, data, out, format;
+  BatchFunctionArgs function;
   bool json = false;
 };
 
@@ -148,7 +148,7 @@ void runTrajectory(const TrajectoryArgs& args) {
   const std::optional<batch::OutputFormat> format =
       args.format.empty() ? std::nullopt : std::optional(batch::parseOutputFormat(args.format));
   if (!format) batch::outputFormatFor(args.out);  // throws naming the path when the extension says nothing
-  const batch::Backend backend = batch::parseBackend(args.backend);
+  batch::BatchFunctionOptions options = batchFunctionOptions(args.function);  // checks --backend first
 
   const std::string urdf_text = readText(args.robot.urdf, "--urdf");
   const Model model =
@@ -156,11 +156,6 @@ void runTrajectory(const TrajectoryArgs& args) {
   const FunctionSpec spec = loadFunctionSpec(args.spec);
 
   const bool terminal = !args.json && ::isatty(STDERR_FILENO);
-  batch::BatchFunctionOptions options;
-  options.backend = backend;
-  options.threads = args.threads;
-  options.compiler = args.compiler;
-  if (backend == batch::Backend::Compiled) options.cache_dir = cacheDirFor(args.cache_dir);
   options.on_progress = [&](const std::string& what) {
     if (what == "building" && !args.json)
       std::cerr << "building " << toString(spec.function) << " for " << model.name << " into the cache "
@@ -173,7 +168,7 @@ void runTrajectory(const TrajectoryArgs& args) {
   job.data = args.data;
   job.out = args.out;
   job.format = format;
-  job.threads = args.threads;
+  job.threads = args.function.threads;
   job.evaluation.cancelled = [] { return g_interrupted.load(); };
   if (terminal)
     job.evaluation.progress = [](std::uint64_t done, std::uint64_t total) {
@@ -189,7 +184,7 @@ void runTrajectory(const TrajectoryArgs& args) {
     throw CLI::RuntimeError(kExitInterrupted);
   }
   if (terminal) std::cerr << "\r\033[K" << std::flush;
-  const unsigned threads = args.threads ? args.threads : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = args.function.threads ? args.function.threads : std::max(1u, std::thread::hardware_concurrency());
   if (args.json)
     std::cout << reportJson(report, function, spec, model, threads).dump() << "\n";
   else
@@ -218,20 +213,7 @@ void addTrajectoryCommand(CLI::App& app) {
   cmd->add_option("--format", args->format, "Output format regardless of --out's extension")
       ->check(CLI::IsMember({"csv", "binary"}))
       ->type_name("csv|binary");
-  cmd->add_option("--backend", args->backend,
-                  "compiled: the compiled library from the cache, built first when missing (batched entry point); "
-                  "interpreted: no compiler, ready at once, slower per knot")
-      ->check(CLI::IsMember({"compiled", "generated", "interpreted"}))
-      ->type_name("compiled|interpreted");
-  cmd->add_option("--cache", args->cache_dir,
-                  "Cache directory for compiled functions (default: $ROBODIFF_CACHE_DIR, else "
-                  "$XDG_CACHE_HOME/robodiff, else ~/.cache/robodiff)")
-      ->type_name("DIR");
-  cmd->add_option("--compiler", args->compiler, "C compiler to run when building (default: $CC, else cc)")
-      ->type_name("CC");
-  cmd->add_option("--threads", args->threads, "Threads evaluating knots (default: all cores)")
-      ->check(CLI::Range(1u, 4096u))
-      ->type_name("N");
+  addBatchFunctionOptions(*cmd, args->function, "knot");
   cmd->add_flag("--json", args->json, "Print the summary as one JSON object");
   cmd->footer(
       "Floating base (--floating-base): q_root_joint_x, _y, _z, _qx, _qy, _qz, _qw and "

@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cache_location.hpp"
+#include "batch_function_options.hpp"
 #include "commands.hpp"
 #include "robodiff/batch/trajectory_optimization.hpp"
 #include "robodiff/batch/trajectory_optimization_csv.hpp"
@@ -24,7 +24,8 @@ namespace robodiff::cli {
 namespace {
 
 struct TrajoptArgs {
-  std::string urdf, q0, qT, out, backend = "compiled", cache_dir;
+  std::string urdf, q0, qT, out;
+  BatchFunctionArgs function;
   int knots = 50, max_iterations = 3000, print_level = 0;
   double duration = 2.0, torque_weight = 1e-3, smoothness_weight = 1.0, tolerance = 1e-8;
   bool no_velocity_limits = false, torque_limits = false, json = false;
@@ -84,7 +85,7 @@ void printSummary(std::ostream& out, const Model& model, const TrajoptArgs& args
   const double h = options.duration / (options.knots - 1);
   out << "trajopt " << (model.name.empty() ? args.urdf : model.name) << ": " << options.knots << " knots over "
       << number(options.duration) << " s (h = " << number(h) << " s), torque weight " << number(options.torque_weight)
-      << ", smoothness weight " << number(options.smoothness_weight) << ", " << args.backend << " backend\n";
+      << ", smoothness weight " << number(options.smoothness_weight) << ", " << args.function.backend << " backend\n";
   out << "  status         " << r.status << " after " << r.iterations << " iterations"
       << (r.cancelled ? " (cancelled)" : "") << "\n";
   out << "  time           solve " << number(r.solve_seconds) << " s, of which function evaluations "
@@ -121,9 +122,7 @@ void run(const TrajoptArgs& args) {
     options.ipopt.extra.emplace_back(option.substr(0, equals), option.substr(equals + 1));
   }
 
-  batch::BatchFunctionOptions functions;
-  functions.backend = batch::parseBackend(args.backend);
-  functions.cache_dir = cacheDirFor(args.cache_dir);
+  batch::BatchFunctionOptions functions = batchFunctionOptions(args.function);
   functions.on_progress = [told = std::make_shared<bool>(false)](const std::string& what) {
     if (what != "building" || *told) return;
     *told = true;
@@ -184,14 +183,7 @@ void addTrajoptCommand(CLI::App& app) {
   cmd->add_option("--out", args->out, "Write the knots as CSV: t, q_<joint>..., v_<joint>..., a_<joint>..., "
                                       "tau_<joint>...")
       ->type_name("FILE.csv");
-  cmd->add_option("--backend", args->backend,
-                  "compiled (default): generated code from the cache, built once per robot; interpreted: nothing "
-                  "compiled, slower per knot")
-      ->check(CLI::IsMember({"compiled", "generated", "interpreted"}));
-  cmd->add_option("--cache", args->cache_dir,
-                  "Cache of compiled functions (default $ROBODIFF_CACHE_DIR, else $XDG_CACHE_HOME/robodiff, else "
-                  "~/.cache/robodiff)")
-      ->type_name("DIR");
+  addBatchFunctionOptions(*cmd, args->function, "knot", /*with_threads=*/true);
   cmd->add_option("--max-iter", args->max_iterations, "Ipopt's iteration limit (default 3000)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--tolerance", args->tolerance, "Ipopt's tol (default 1e-8)")->check(CLI::PositiveNumber);

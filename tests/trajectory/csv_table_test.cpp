@@ -4,24 +4,13 @@
 
 #include "robodiff/batch/csv_table.hpp"
 #include "robodiff/batch/trajectory_error.hpp"
+#include "trajectory/trajectory_fixtures.hpp"
 
 namespace robodiff::testing {
 namespace {
 
 using batch::CsvTable;
 using batch::TrajectoryError;
-
-// The message of the TrajectoryError `parse` throws; fails the test when none is thrown.
-template <typename F>
-std::string errorOf(F&& parse) {
-  try {
-    parse();
-  } catch (const TrajectoryError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no TrajectoryError";
-  return "";
-}
 
 TEST(CsvTable, ReadsCrlfCommentsBlankLinesAndQuotedNames) {
   const CsvTable csv = CsvTable::parse(

@@ -10,7 +10,10 @@
 
 #include <Eigen/Core>
 
+#include <gtest/gtest.h>
+
 #include "robodiff/batch/batch_function.hpp"
+#include "robodiff/batch/trajectory_error.hpp"
 #include "robodiff/batch/trajectory_table.hpp"
 #include "robodiff/functions/reference.hpp"
 #include "robodiff/model/urdf_loader.hpp"
@@ -79,6 +82,18 @@ inline std::string trajectoryCsv(const Model& model, const batch::BatchFunction&
     csv << ",knot " << k << "\n";
   }
   return csv.str();
+}
+
+// The message of the TrajectoryError `parse` throws; fails the test when none is thrown.
+template <typename F>
+std::string errorOf(F&& parse) {
+  try {
+    parse();
+  } catch (const batch::TrajectoryError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no TrajectoryError";
+  return "";
 }
 
 }  // namespace robodiff::testing

@@ -16,17 +16,6 @@ using batch::BlockLayout;
 using batch::TrajectoryError;
 using batch::TrajectoryTable;
 
-template <typename F>
-std::string errorOf(F&& parse) {
-  try {
-    parse();
-  } catch (const TrajectoryError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no TrajectoryError";
-  return "";
-}
-
 // rnea's blocks for a robot with nq, nv, as BatchFunction lays them out.
 std::vector<BlockLayout> blocks(std::uint32_t nq, std::uint32_t nv, const std::vector<std::string>& names = {"q", "v", "a"}) {
   std::vector<BlockLayout> out;
