@@ -107,6 +107,19 @@ void DdsServer::stop() {
   c.log.info("dds_server_stopped", {{"domain", domain}, {"in_flight", c.in_flight.load()}});
 }
 
+Status DdsServer::ready() const {
+  const Core& c = *core_;
+  if (!c.endpoints) return {StatusCode::Unavailable, "DDS server not started"};
+  if (c.stopping) return {StatusCode::Unavailable, "DDS server stopping"};
+  dds_domainid_t domain = 0;
+  if (const dds_return_t rc = dds_get_domainid(c.endpoints->participant(), &domain); rc != DDS_RETCODE_OK)
+    return {StatusCode::Unavailable, "DDS participant: " + dds_codec::ddsError("dds_get_domainid", rc)};
+  std::uint32_t changes = 0;
+  if (const dds_return_t rc = dds_get_status_changes(c.endpoints->reader(), &changes); rc != DDS_RETCODE_OK)
+    return {StatusCode::Unavailable, "DDS request reader: " + dds_codec::ddsError("dds_get_status_changes", rc)};
+  return {};
+}
+
 std::size_t DdsServer::inFlight() const { return core_->in_flight.load(); }
 std::uint32_t DdsServer::domainId() const { return core_->endpoints ? core_->endpoints->domainId() : 0; }
 std::string DdsServer::requestTopic() const { return dds_codec::requestTopicName(core_->options.service_name); }

@@ -1,6 +1,7 @@
 // robodiffd: the robodiff service daemon. Reads its configuration (embedded defaults, a
 // file, flags), opens the cache, starts the build workers, serves over iceoryx (starting
-// a RouDi inside the process when none runs) and Cyclone DDS, and on SIGTERM or SIGINT
+// a RouDi inside the process when none runs) and Cyclone DDS, answers operators over HTTP
+// (GET /metrics, /healthz, /readyz; 127.0.0.1:9464 by default), and on SIGTERM or SIGINT
 // drains: new requests get UNAVAILABLE, requests in flight are answered, then it exits 0.
 //
 // Exit codes: 0 stopped cleanly; 1 could not start (the log says why); 2 bad usage or
@@ -23,8 +24,13 @@
 #include <nlohmann/json.hpp>
 
 #include "robodiff/batch/batch_job.hpp"
+#include "robodiff/cache/cache.hpp"
+#include "robodiff/schema/shm_runtime.hpp"
 #include "robodiff/server/dds_server.hpp"
+#include "robodiff/server/http_server.hpp"
+#include "robodiff/server/probes.hpp"
 #include "robodiff/server/service.hpp"
+#include "robodiff/server/service_metrics_text.hpp"
 #include "robodiff/server/shm_server.hpp"
 #include "server_config.hpp"
 
@@ -50,9 +56,9 @@ sigset_t blockStopSignals() {
 struct Flags {
   std::string config_file;
   std::vector<std::string> sets;
-  std::string cache_dir, instance_id, log_level, log_format, roudi;
+  std::string cache_dir, instance_id, log_level, log_format, roudi, http;
   int workers = -1, dds_domain = -2;
-  bool no_dds = false, no_iceoryx = false, interpreter_only = false, print_config = false;
+  bool no_dds = false, no_iceoryx = false, no_http = false, interpreter_only = false, print_config = false;
   double drain_timeout_s = 30;
 };
 
@@ -67,6 +73,8 @@ void addFlags(CLI::App& app, Flags& f) {
   app.add_option("--dds-domain", f.dds_domain, "DDS domain id (dds.domain)");
   app.add_flag("--no-dds", f.no_dds, "Do not serve over DDS (dds.enabled = false)");
   app.add_flag("--no-iceoryx", f.no_iceoryx, "Do not serve over iceoryx (iceoryx.enabled = false)");
+  app.add_option("--http", f.http, "Serve /metrics, /healthz, /readyz on this IPv4 host:port (http.listen)");
+  app.add_flag("--no-http", f.no_http, "No HTTP listener (http.enabled = false)");
   app.add_option("--roudi", f.roudi, "auto | external | embedded | detached (iceoryx.roudi)");
   app.add_flag("--interpreter-only", f.interpreter_only, "Never compile (build.compile = false)");
   app.add_option("--log-level", f.log_level, "debug | info | warn | error (log.level)");
@@ -93,6 +101,11 @@ ServerConfig configure(const Flags& f) {
   if (f.no_dds) config.dds.enabled = false;
   if (f.no_iceoryx) config.shm.enabled = false;
   if (!f.roudi.empty()) applySetting(config, "iceoryx.roudi", f.roudi, "--roudi");
+  if (!f.http.empty()) {
+    applySetting(config, "http.listen", f.http, "--http");
+    config.http.enabled = true;
+  }
+  if (f.no_http) config.http.enabled = false;
   if (f.interpreter_only) config.service.compile = false;
   if (!f.log_level.empty()) applySetting(config, "log.level", f.log_level, "--log-level");
   if (!f.log_format.empty()) applySetting(config, "log.format", f.log_format, "--log-format");
@@ -106,6 +119,32 @@ const char* signalName(int sig) {
     case SIGHUP: return "SIGHUP";
   }
   return "signal";
+}
+
+// Keep the cache usable: below this much free space the server is not ready.
+constexpr std::uint64_t kCacheMinFreeBytes = std::uint64_t{64} << 20;
+
+// The readiness checks: RouDi (iceoryx on), the DDS participant (DDS on), the cache
+// directory, and the service itself serving (not starting, not draining).
+void addReadinessChecks(Probes& probes, const ServerConfig& config, const Service& service, const DdsServer* dds,
+                        const std::filesystem::path& cache_dir) {
+  probes.addReadinessCheck("service", [&service]() -> ProbeResult {
+    const auto state = service.state();
+    if (state == robodiff::rpc::ServingState::Serving) return {true, ""};
+    return {false, std::string("state ") + robodiff::rpc::toString(state)};
+  });
+  if (config.shm.enabled)
+    probes.addReadinessCheck("roudi", []() -> ProbeResult {
+      if (robodiff::shm::roudiRunning()) return {true, ""};
+      return {false, "RouDi does not answer on " + robodiff::shm::roudiSocketPath() +
+                         "; iceoryx clients cannot connect"};
+    });
+  if (dds != nullptr)
+    probes.addReadinessCheck("dds", [dds]() -> ProbeResult {
+      const robodiff::Status ready = dds->ready();
+      return {ready.ok(), ready.message};
+    });
+  probes.addReadinessCheck("cache", [cache_dir] { return checkDirectoryWritable(cache_dir, kCacheMinFreeBytes); });
 }
 
 }  // namespace
@@ -175,6 +214,39 @@ int main(int argc, char** argv) {
       dds = std::make_unique<DdsServer>(service, options, log);
       dds->start();
     }
+
+    // Operators' HTTP endpoints; stopped before the transports and the service go.
+    Probes probes;
+    std::unique_ptr<HttpServer> http;
+    if (config.http.enabled) {
+      probes.setLivenessNote([&service] {
+        return service.state() == robodiff::rpc::ServingState::Draining ? std::string("draining") : std::string();
+      });
+      const std::filesystem::path cache_dir =
+          config.service.cache_dir.empty() ? robodiff::cache::defaultCacheDir() : config.service.cache_dir;
+      addReadinessChecks(probes, config, service, dds.get(), cache_dir);
+      HttpServerOptions options;
+      options.host = config.http.host;
+      options.port = config.http.port;
+      http = std::make_unique<HttpServer>(options);
+      http->route("/metrics", [&service](const HttpRequest&) {
+        HttpResponse r;
+        r.content_type = kPrometheusContentType;
+        r.body = serviceMetricsText(service.metrics());
+        return r;
+      });
+      probes.routeOn(*http);
+      // Not fatal: the transports are the service; a probe that cannot connect shows the problem.
+      try {
+        http->start();
+        log.info("http_listening", {{"address", http->address()},
+                                    {"port", static_cast<long long>(http->port())},
+                                    {"paths", "/metrics /healthz /readyz"}});
+      } catch (const std::exception& e) {
+        log.error("http_failed", {{"message", e.what()}});
+        http.reset();
+      }
+    }
     service.markServing();
     log.info("serving", {{"instance_id", service.instanceId()},
                          {"iceoryx", config.shm.enabled},
@@ -199,6 +271,7 @@ int main(int argc, char** argv) {
     if (shm) idle = shm->waitIdle(left()) && idle;
     if (dds) idle = dds->waitIdle(left()) && idle;
     if (!idle) log.warn("drain_timeout", {{"seconds", flags.drain_timeout_s}});
+    if (http) http->stop();  // its checks read the transports and the service
     if (dds) dds->stop();
     if (shm) shm->stop();
     dds.reset();

@@ -2,6 +2,8 @@
 // prints it back. The file reader, --set and --print-config all go through it.
 #include "server_config.hpp"
 
+#include <arpa/inet.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -160,6 +162,10 @@ const std::vector<Setting>& settings() {
        [](const ServerConfig& c) { return quoted(c.dds.service); }},
       {"dds.max_sample", [](ServerConfig& c, const std::string& v) { c.dds.max_sample_bytes = parseBytes(v); },
        [](const ServerConfig& c) { return formatBytes(c.dds.max_sample_bytes); }},
+      {"http.enabled", [](ServerConfig& c, const std::string& v) { c.http.enabled = parseBool(v); },
+       [](const ServerConfig& c) { return std::string(c.http.enabled ? "true" : "false"); }},
+      {"http.listen", [](ServerConfig& c, const std::string& v) { parseListenAddress(v, c.http); },
+       [](const ServerConfig& c) { return quoted(c.http.host + ":" + std::to_string(c.http.port)); }},
       {"log.level", [](ServerConfig& c, const std::string& v) { c.log_level = parseLogLevel(v); },
        [](const ServerConfig& c) { return std::string(toString(c.log_level)); }},
       {"log.format", [](ServerConfig& c, const std::string& v) { c.log_format = parseLogFormat(v); },
@@ -177,6 +183,23 @@ const Setting* findSetting(const std::string& key) {
 std::string sectionOf(const std::string& key) { return key.substr(0, key.find('.')); }
 
 }  // namespace
+
+void parseListenAddress(const std::string& value, HttpSettings& http) {
+  const auto colon = value.rfind(':');
+  if (colon == std::string::npos) throw std::invalid_argument("is not host:port (e.g. 127.0.0.1:9464)");
+  const std::string host = value.substr(0, colon), port = value.substr(colon + 1);
+  in_addr address{};
+  if (::inet_pton(AF_INET, host.c_str(), &address) != 1)
+    throw std::invalid_argument("has host '" + host + "', not an IPv4 address (e.g. 127.0.0.1, 0.0.0.0)");
+  std::uint64_t number = 0;
+  try {
+    number = parseUnsigned(port, 65535);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("has port '" + port + "' that " + e.what() + " (0..65535; 0: any free port)");
+  }
+  http.host = host;
+  http.port = static_cast<std::uint16_t>(number);
+}
 
 std::vector<std::string> configKeys() {
   std::vector<std::string> keys;
@@ -226,7 +249,7 @@ void applyConfigText(ServerConfig& config, const std::string& text, const std::s
       for (const Setting& s : settings()) known = known || sectionOf(s.key) == section;
       if (!known)
         throw ConfigError(where + ": unknown section [" + section +
-                          "] (known: service, build, cache, iceoryx, dds, log)");
+                          "] (known: service, build, jobs, cache, iceoryx, dds, http, log)");
       continue;
     }
     const auto eq = line.find('=');

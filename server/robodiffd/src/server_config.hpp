@@ -9,6 +9,7 @@
 // the file, the line, the key and the value.
 
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,10 +31,18 @@ struct DdsSettings {
   std::uint64_t max_sample_bytes = 512 * 1024;  // EvaluateBatch replies beyond are split
 };
 
+// The HTTP listener for operators: GET /metrics (Prometheus), /healthz, /readyz.
+struct HttpSettings {
+  bool enabled = true;
+  std::string host = "127.0.0.1";  // IPv4; loopback by default: nothing is exposed off the host
+  std::uint16_t port = 9464;       // 0: an ephemeral port (logged as http_listening)
+};
+
 struct ServerConfig {
   ServiceOptions service;
   ShmSettings shm;
   DdsSettings dds;
+  HttpSettings http;
   LogLevel log_level = LogLevel::Info;
   LogFormat log_format = LogFormat::Json;
 };
@@ -42,6 +51,10 @@ class ConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// "host:port" (IPv4 dotted quad, port 0..65535) into `http`; std::invalid_argument saying
+// what is wrong otherwise.
+void parseListenAddress(const std::string& value, HttpSettings& http);
 
 // Applies one setting ("service.request_threads", "8"); `where` names its origin in
 // errors ("robodiffd.conf:12", "--set"). Throws ConfigError.

@@ -29,6 +29,7 @@ std::uint64_t LatencyHistogram::upperBound(std::size_t bucket) {
 void LatencyHistogram::record(std::uint64_t ns) {
   buckets_[bucketOf(ns)].fetch_add(1, std::memory_order_relaxed);
   count_.fetch_add(1, std::memory_order_relaxed);
+  sum_.fetch_add(ns, std::memory_order_relaxed);
   std::uint64_t seen = max_.load(std::memory_order_relaxed);
   while (ns > seen && !max_.compare_exchange_weak(seen, ns, std::memory_order_relaxed)) {
   }
@@ -48,6 +49,22 @@ std::uint64_t LatencyHistogram::percentile(double fraction) const {
     if (seen >= rank) return std::min(upperBound(b), max());
   }
   return max();
+}
+
+LatencyHistogram::Cumulative LatencyHistogram::cumulative(std::span<const std::uint64_t> bounds_ns) const {
+  Cumulative out;
+  out.counts.assign(bounds_ns.size(), 0);
+  out.sum_ns = sum_.load(std::memory_order_relaxed);
+  std::size_t bound = 0;  // the first bound this bucket may count under
+  for (std::size_t b = 0; b < kBuckets; ++b) {
+    const std::uint64_t n = buckets_[b].load(std::memory_order_relaxed);
+    out.total += n;
+    if (n == 0) continue;
+    while (bound < bounds_ns.size() && upperBound(b) > bounds_ns[bound]) ++bound;
+    if (bound < bounds_ns.size()) out.counts[bound] += n;
+  }
+  for (std::size_t i = 1; i < out.counts.size(); ++i) out.counts[i] += out.counts[i - 1];
+  return out;
 }
 
 }  // namespace robodiff::server::detail

@@ -7,6 +7,8 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <span>
+#include <vector>
 
 namespace robodiff::server::detail {
 
@@ -19,6 +21,17 @@ class LatencyHistogram {
   // The latency under which `fraction` (0..1) of the recorded ones fall; 0 when none.
   std::uint64_t percentile(double fraction) const;
 
+  // Cumulative counts for a metrics endpoint, from one snapshot of the buckets (so the
+  // counts agree with each other): counts[i] = latencies whose bucket lies wholly at or
+  // below bounds_ns[i] (ascending); a bucket straddling a bound is counted under the next
+  // one (at most 9% off). total = every latency (the +Inf bucket), sum_ns their sum.
+  struct Cumulative {
+    std::vector<std::uint64_t> counts;
+    std::uint64_t total = 0;
+    std::uint64_t sum_ns = 0;
+  };
+  Cumulative cumulative(std::span<const std::uint64_t> bounds_ns) const;
+
   // Bucket arithmetic, exposed for tests: index of a value, and a bucket's largest value.
   static std::size_t bucketOf(std::uint64_t ns);
   static std::uint64_t upperBound(std::size_t bucket);
@@ -30,6 +43,7 @@ class LatencyHistogram {
   std::array<std::atomic<std::uint64_t>, kBuckets> buckets_{};
   std::atomic<std::uint64_t> count_{0};
   std::atomic<std::uint64_t> max_{0};
+  std::atomic<std::uint64_t> sum_{0};  // nanoseconds; wraps after 584 years of latency
 };
 
 }  // namespace robodiff::server::detail

@@ -26,6 +26,8 @@ void RequestStats::record(std::string_view transport_name, rpc::Method method, S
   if (m < methods_.size()) {
     methods_[m].latency.record(static_cast<std::uint64_t>(std::max<std::int64_t>(latency.count(), 0)));
     if (error) methods_[m].errors.fetch_add(1, std::memory_order_relaxed);
+    methods_[m].codes[std::min<std::size_t>(static_cast<std::size_t>(code), kStatusCodeCount)].fetch_add(
+        1, std::memory_order_relaxed);
   }
   if (error)
     codes_[std::min<std::size_t>(static_cast<std::size_t>(code), kStatusCodeCount)].fetch_add(
@@ -76,6 +78,16 @@ std::vector<rpc::TransportCounts> RequestStats::transports() const {
     out.push_back({transports_[i].name, transports_[i].requests.load(std::memory_order_relaxed),
                    transports_[i].errors.load(std::memory_order_relaxed)});
   return out;
+}
+
+std::uint64_t RequestStats::replies(rpc::Method method, std::size_t code) const {
+  const auto m = static_cast<std::size_t>(method);
+  if (m >= methods_.size() || code > kStatusCodeCount) return 0;
+  return methods_[m].codes[code].load(std::memory_order_relaxed);
+}
+
+const LatencyHistogram& RequestStats::latency(rpc::Method method) const {
+  return methods_.at(static_cast<std::size_t>(method)).latency;
 }
 
 }  // namespace robodiff::server::detail

@@ -26,12 +26,18 @@ class RequestStats {
   std::vector<rpc::StatusCount> errors() const;          // non-OK codes seen
   std::vector<rpc::TransportCounts> transports() const;  // in the order first seen
 
+  // For a metrics endpoint: a method's replies with one status code (kStatusCodeCount:
+  // codes unknown to this build), and its latency histogram.
+  std::uint64_t replies(rpc::Method method, std::size_t code) const;
+  const LatencyHistogram& latency(rpc::Method method) const;
+
   static constexpr std::size_t kMaxTransports = 16;  // beyond: counted under "other"
 
  private:
   struct Method {
     LatencyHistogram latency;
     std::atomic<std::uint64_t> errors{0};
+    std::array<std::atomic<std::uint64_t>, kStatusCodeCount + 1> codes{};  // replies by status, OK included
   };
   struct Transport {
     std::string name;  // written before the slot is published, never after

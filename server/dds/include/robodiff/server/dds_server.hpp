@@ -60,6 +60,10 @@ class DdsServer {
   // go away. Replies of requests still running are dropped. Idempotent.
   void stop();
 
+  // Readiness (robodiffd's /readyz): OK while started and not stopped, with the participant
+  // and the request reader alive in Cyclone (dds_get_domainid, dds_get_status_changes:
+  // microseconds); UNAVAILABLE naming what is not. Not concurrently with start() or stop().
+  Status ready() const;
   // Requests taken and not yet answered (inline and posted).
   std::size_t inFlight() const;
   std::uint32_t domainId() const;           // the actual domain (the default resolved); after start()

@@ -11,7 +11,10 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "robodiff/server/job_manager.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
 
@@ -43,6 +46,32 @@ struct ServiceOptions {
   std::function<Status(const std::string& kind, const std::string& params_json)> validate_job;
 };
 
+// A snapshot of the service's figures for a metrics endpoint (server/http renders it in
+// the Prometheus text format): what Health reports, plus replies by method and status and
+// the latency histograms as cumulative buckets.
+struct ServiceMetrics {
+  struct MethodFigures {
+    rpc::Method method = rpc::Method::LoadModel;
+    std::vector<std::pair<StatusCode, std::uint64_t>> replies;  // OK always, other codes once seen
+    std::vector<std::uint64_t> latency_buckets;  // cumulative, one per latency_bounds_seconds
+    std::uint64_t latency_count = 0;             // every reply (the +Inf bucket)
+    double latency_sum_seconds = 0;
+  };
+  rpc::ServingState state = rpc::ServingState::Starting;
+  double uptime_seconds = 0;
+  std::vector<double> latency_bounds_seconds;  // ascending upper bounds ("le")
+  std::vector<MethodFigures> methods;          // one per method, in Method order
+  std::vector<rpc::TransportCounts> transports;
+  std::uint32_t models_loaded = 0, functions_loaded = 0, functions_compiled = 0;
+  std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
+  std::uint64_t cache_hits = 0, cache_misses = 0, cache_bytes = 0, cache_entries = 0;
+  bool cache_stats_ok = true;  // false: the cache's figures could not be read (bytes, entries 0)
+  std::uint32_t workers_total = 0, workers_busy = 0;
+  std::uint32_t queue_depth = 0, queue_capacity = 0;
+  bool jobs_enabled = false;
+  JobCounts jobs;
+};
+
 class Service final : public ServiceApi {
  public:
   // Opens the cache and starts the worker pool and the threads. Throws
@@ -61,6 +90,8 @@ class Service final : public ServiceApi {
   rpc::ServingState state() const;
 
   const ServiceOptions& options() const;
+  // The figures for a metrics endpoint; cheap (atomics, a cache stats query), any thread.
+  ServiceMetrics metrics() const;
 
   // ServiceApi
   const std::string& instanceId() const override;

@@ -1,0 +1,76 @@
+#pragma once
+// A small HTTP/1.1 server for operators' endpoints (metrics, probes): one IPv4 listening
+// socket and one thread multiplexing every connection with poll(), so a slow or silent
+// client never holds up another. GET and HEAD only; one request per connection
+// (`Connection: close`); the request head is limited in size and must arrive within the
+// read timeout, else the client gets 400 or is dropped. Routes are exact paths (the query
+// string is ignored) answered by callbacks on the server thread: they must be quick.
+//
+// Answers: the route's response; 404 for an unknown path; 405 (with Allow) for another
+// method on a known path; 400 for a malformed or oversized head; 500 when a route throws.
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace robodiff::server {
+
+struct HttpServerOptions {
+  std::string host = "127.0.0.1";  // IPv4 address to bind (0.0.0.0: every interface)
+  std::uint16_t port = 9464;       // 0: an ephemeral port (port() tells which)
+  std::size_t max_head_bytes = 8192;                       // request line and headers
+  std::chrono::milliseconds read_timeout = std::chrono::seconds(5);   // for the whole head
+  std::chrono::milliseconds write_timeout = std::chrono::seconds(5);  // for the whole response
+  std::size_t max_connections = 64;  // beyond: new connections wait in the listen backlog
+};
+
+struct HttpRequest {
+  std::string method;  // "GET" or "HEAD"
+  std::string target;  // as sent: "/metrics?x=1"
+  std::string path;    // without the query: "/metrics"
+  std::string query;   // after '?', undecoded
+  std::vector<std::pair<std::string, std::string>> headers;  // names lower-cased
+};
+
+struct HttpResponse {
+  int status = 200;
+  std::string content_type = "text/plain; charset=utf-8";
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  // extra ones
+};
+
+using HttpHandler = std::function<HttpResponse(const HttpRequest&)>;
+
+// "OK", "Not Found", ... for the codes this server sends; "Unknown" otherwise.
+const char* httpReasonPhrase(int status);
+
+class HttpServer {
+ public:
+  explicit HttpServer(HttpServerOptions options = {});
+  ~HttpServer();  // stop()
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  // Answers GET and HEAD on `path` (exact match). Before start().
+  void route(std::string path, HttpHandler handler);
+
+  // Binds, listens and starts the thread. Throws std::runtime_error naming the address and
+  // the reason (address in use, not an IPv4 address, ...). Once only.
+  void start();
+  // Closes the listener and every connection, and joins the thread. Idempotent.
+  void stop();
+
+  std::uint16_t port() const;   // the bound port (after start)
+  std::string address() const;  // "host:port" as bound (after start)
+
+ private:
+  struct Impl;  // http_server.cpp
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace robodiff::server
