@@ -5,6 +5,46 @@
 #include <algorithm>
 
 namespace robodiff::server {
+namespace {
+
+// The figures Health and metrics() both report (their structs name them alike): models and
+// functions, builds, cache, workers, queue. Returns false when the cache's stats could not
+// be read (the rest is filled in anyway).
+template <class State, class Out>
+bool fillServiceFigures(State& s, Out& out) {
+  out.models_loaded = static_cast<std::uint32_t>(s.registry.modelCount());
+  const auto functions = s.registry.functions();
+  out.functions_loaded = static_cast<std::uint32_t>(functions.size());
+  out.functions_compiled = 0;
+  for (const auto& f : functions) out.functions_compiled += f->compiled() ? 1 : 0;
+
+  const detail::BuildFigures builds = s.builds.figures();
+  out.builds_queued = builds.builds_queued;
+  out.builds_running = builds.builds_running;
+  out.builds_failed = builds.builds_failed;
+  out.builds_done = builds.builds_done;
+  out.cache_hits = builds.cache_hits;
+  out.cache_misses = builds.cache_misses;
+  bool cache_ok = true;
+  try {
+    const cache::CacheStats stats = s.cache.stats();
+    out.cache_bytes = stats.bytes;
+    out.cache_entries = stats.entries;
+  } catch (const std::exception& e) {
+    cache_ok = false;
+    s.log.warn("cache_stats_failed", {{"message", e.what()}});  // the figures still answer
+  }
+
+  const std::vector<workers::WorkerInfo> workers = s.pool.workers();
+  out.workers_total = static_cast<std::uint32_t>(workers.size());
+  out.workers_busy = 0;
+  for (const workers::WorkerInfo& w : workers) out.workers_busy += w.job ? 1 : 0;
+  out.queue_depth = static_cast<std::uint32_t>(s.requests.depth());
+  out.queue_capacity = static_cast<std::uint32_t>(s.requests.capacity());
+  return cache_ok;
+}
+
+}  // namespace
 
 Status Service::health(const CallContext& ctx, const rpc::HealthRequest& request, rpc::HealthReply& reply) {
   State& s = *state_;
@@ -17,34 +57,7 @@ Status Service::health(const CallContext& ctx, const rpc::HealthRequest& request
     reply.uptime_ns = static_cast<std::uint64_t>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - s.started).count());
 
-    reply.models_loaded = static_cast<std::uint32_t>(s.registry.modelCount());
-    const auto functions = s.registry.functions();
-    reply.functions_loaded = static_cast<std::uint32_t>(functions.size());
-    reply.functions_compiled = 0;
-    for (const auto& f : functions) reply.functions_compiled += f->compiled() ? 1 : 0;
-
-    const detail::BuildFigures builds = s.builds.figures();
-    reply.builds_queued = builds.builds_queued;
-    reply.builds_running = builds.builds_running;
-    reply.builds_failed = builds.builds_failed;
-    reply.builds_done = builds.builds_done;
-    reply.cache_hits = builds.cache_hits;
-    reply.cache_misses = builds.cache_misses;
-    try {
-      const cache::CacheStats stats = s.cache.stats();
-      reply.cache_bytes = stats.bytes;
-      reply.cache_entries = stats.entries;
-    } catch (const std::exception& e) {
-      s.log.warn("cache_stats_failed", {{"message", e.what()}});  // Health still answers
-    }
-
-    const std::vector<workers::WorkerInfo> workers = s.pool.workers();
-    reply.workers_total = static_cast<std::uint32_t>(workers.size());
-    reply.workers_busy = 0;
-    for (const workers::WorkerInfo& w : workers) reply.workers_busy += w.job ? 1 : 0;
-
-    reply.queue_depth = static_cast<std::uint32_t>(s.requests.depth());
-    reply.queue_capacity = static_cast<std::uint32_t>(s.requests.capacity());
+    fillServiceFigures(s, reply);
     reply.batch_threads = s.batch.threads();
     reply.methods = s.stats.methods();
     reply.errors = s.stats.errors();
@@ -89,32 +102,7 @@ ServiceMetrics Service::metrics() const {
   }
   m.transports = s.stats.transports();
 
-  m.models_loaded = static_cast<std::uint32_t>(s.registry.modelCount());
-  const auto functions = s.registry.functions();
-  m.functions_loaded = static_cast<std::uint32_t>(functions.size());
-  for (const auto& f : functions) m.functions_compiled += f->compiled() ? 1 : 0;
-
-  const detail::BuildFigures builds = s.builds.figures();
-  m.builds_queued = builds.builds_queued;
-  m.builds_running = builds.builds_running;
-  m.builds_failed = builds.builds_failed;
-  m.builds_done = builds.builds_done;
-  m.cache_hits = builds.cache_hits;
-  m.cache_misses = builds.cache_misses;
-  try {
-    const cache::CacheStats stats = s.cache.stats();
-    m.cache_bytes = stats.bytes;
-    m.cache_entries = stats.entries;
-  } catch (const std::exception& e) {
-    m.cache_stats_ok = false;
-    s.log.warn("cache_stats_failed", {{"message", e.what()}});
-  }
-
-  const std::vector<workers::WorkerInfo> workers = s.pool.workers();
-  m.workers_total = static_cast<std::uint32_t>(workers.size());
-  for (const workers::WorkerInfo& w : workers) m.workers_busy += w.job ? 1 : 0;
-  m.queue_depth = static_cast<std::uint32_t>(s.requests.depth());
-  m.queue_capacity = static_cast<std::uint32_t>(s.requests.capacity());
+  m.cache_stats_ok = fillServiceFigures(s, m);
   if (s.jobs) {
     m.jobs_enabled = true;
     m.jobs = s.jobs->counts();
