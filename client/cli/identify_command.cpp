@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "batch_function_options.hpp"
+#include "robodiff/batch/atomic_file.hpp"
 #include "commands.hpp"
 #include "function_options.hpp"
 #include "output_table.hpp"
@@ -63,9 +64,9 @@ UrdfOutcome writeUrdf(const IdentifyArgs& args, const batch::IdentificationProbl
   try {
     outcome.rewrite =
         batch::rewriteUrdfInertials(problem.urdf_text, problem.urdf_source, problem.model, result.parameters);
-    std::ofstream out(args.out_urdf, std::ios::binary);
-    out << outcome.rewrite->text;
-    if (!out.flush()) throw std::runtime_error("cannot write " + args.out_urdf);
+    batch::AtomicFile out(args.out_urdf);  // all or nothing: never half a URDF
+    out.write(outcome.rewrite->text);
+    out.commit();
   } catch (const std::exception& e) {
     outcome.rewrite.reset();
     outcome.error = std::string("--out-urdf ") + args.out_urdf + ": " + e.what();

@@ -7,10 +7,10 @@
 // identified.urdf (the URDF with the identified inertials, when every body can be written).
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 
 #include "job_kinds.hpp"
 #include "job_params.hpp"
+#include "robodiff/batch/atomic_file.hpp"
 #include "robodiff/batch/identification.hpp"
 #include "robodiff/batch/identification_json.hpp"
 #include "robodiff/batch/physical_identification.hpp"
@@ -20,9 +20,9 @@ namespace robodiff::batch {
 namespace {
 
 void writeText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+  AtomicFile file(path);
+  file.write(text);
+  file.commit();
 }
 
 }  // namespace

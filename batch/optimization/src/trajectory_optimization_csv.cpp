@@ -3,11 +3,9 @@
 #include "robodiff/batch/trajectory_optimization_csv.hpp"
 
 #include <charconv>
-#include <fstream>
-#include <stdexcept>
-#include <system_error>
+#include <sstream>
 
-#include <unistd.h>
+#include "robodiff/batch/atomic_file.hpp"
 
 namespace robodiff::batch {
 namespace {
@@ -44,25 +42,11 @@ void writeTrajectoryCsv(std::ostream& out, const Trajectory& trajectory, const s
 
 void writeTrajectoryCsvFile(const std::filesystem::path& path, const Trajectory& trajectory,
                             const std::vector<std::string>& joint_names) {
-  const std::filesystem::path temporary = path.string() + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write the trajectory to " + path.string() + ": cannot create the file");
-    writeTrajectoryCsv(out, trajectory, joint_names);
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw std::runtime_error("cannot write the trajectory to " + path.string() + ": write failed");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw std::runtime_error("cannot write the trajectory to " + path.string() + ": " + error.message());
-  }
+  std::ostringstream text;
+  writeTrajectoryCsv(text, trajectory, joint_names);
+  AtomicFile file(path);  // all or nothing; AtomicFileError names the path
+  file.write(text.str());
+  file.commit();
 }
 
 }  // namespace robodiff::batch

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atomic_file.hpp"
+#include "robodiff/batch/atomic_file.hpp"
 #include "robodiff/batch/trajectory_error.hpp"
 
 namespace robodiff::batch {
@@ -193,13 +193,17 @@ void writeTrajectoryOutput(const std::filesystem::path& path, const TrajectoryOu
     throw std::invalid_argument("writeTrajectoryOutput: values or times do not match the knot count");
   const OutputFormat format = options.format ? *options.format : outputFormatFor(path);
   checkCancelled(options, path);
-  AtomicFile file(path);
-  if (format == OutputFormat::Csv)
-    writeCsv(file, path, output, options);
-  else
-    writeBinary(file, path, output, options);
-  checkCancelled(options, path);
-  file.commit();
+  try {
+    AtomicFile file(path);
+    if (format == OutputFormat::Csv)
+      writeCsv(file, path, output, options);
+    else
+      writeBinary(file, path, output, options);
+    checkCancelled(options, path);
+    file.commit();
+  } catch (const AtomicFileError& e) {
+    throw TrajectoryError(e.what());  // this layer's error type, the same message
+  }
 }
 
 TrajectoryOutput readTrajectoryBinary(const std::filesystem::path& path) {

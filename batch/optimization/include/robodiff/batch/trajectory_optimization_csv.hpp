@@ -16,7 +16,7 @@ namespace robodiff::batch {
 void writeTrajectoryCsv(std::ostream& out, const Trajectory& trajectory, const std::vector<std::string>& joint_names);
 
 // Written to a temporary file beside `path`, then renamed into place; throws
-// std::runtime_error naming the path when it cannot be written.
+// AtomicFileError (a std::runtime_error) naming the path when it cannot be written.
 void writeTrajectoryCsvFile(const std::filesystem::path& path, const Trajectory& trajectory,
                             const std::vector<std::string>& joint_names);
 

@@ -5,19 +5,26 @@
 // cancellation), the temporary file is removed and the target is untouched.
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
 namespace robodiff::batch {
 
+// A file that could not be created, written or put in place; the message names it.
+class AtomicFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class AtomicFile {
  public:
-  explicit AtomicFile(std::filesystem::path target);  // throws TrajectoryError naming the directory
+  explicit AtomicFile(std::filesystem::path target);  // throws AtomicFileError naming the directory
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
-  // Buffered; throws TrajectoryError naming the target on a failed write (disk full).
+  // Buffered; throws AtomicFileError naming the target on a failed write (disk full).
   void write(std::string_view bytes);
   void commit();
 

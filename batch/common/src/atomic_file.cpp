@@ -1,5 +1,5 @@
 // AtomicFile: mkstemp beside the target, write, fsync, rename, fsync the directory.
-#include "atomic_file.hpp"
+#include "robodiff/batch/atomic_file.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -7,7 +7,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "robodiff/batch/trajectory_error.hpp"
 
 namespace robodiff::batch {
 namespace {
@@ -25,7 +24,7 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
   name += ".tmp-XXXXXX";
   std::string pattern = (dir / name).string();
   fd_ = ::mkstemp(pattern.data());
-  if (fd_ < 0) throw TrajectoryError(target_.string() + ": cannot create a file in " + dir.string() + ": " + systemError());
+  if (fd_ < 0) throw AtomicFileError(target_.string() + ": cannot create a file in " + dir.string() + ": " + systemError());
   temp_ = pattern;
   ::fchmod(fd_, 0644);  // mkstemp makes 0600; an output file is as readable as any other
   buffer_.reserve(kBufferBytes);
@@ -52,7 +51,7 @@ void AtomicFile::flush() {
   while (left > 0) {
     const ssize_t n = ::write(fd_, p, left);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw TrajectoryError(target_.string() + ": writing failed: " + systemError());
+    if (n < 0) throw AtomicFileError(target_.string() + ": writing failed: " + systemError());
     p += n;
     left -= static_cast<std::size_t>(n);
   }
@@ -61,14 +60,14 @@ void AtomicFile::flush() {
 
 void AtomicFile::commit() {
   flush();
-  if (::fsync(fd_) != 0) throw TrajectoryError(target_.string() + ": fsync failed: " + systemError());
+  if (::fsync(fd_) != 0) throw AtomicFileError(target_.string() + ": fsync failed: " + systemError());
   if (::close(fd_) != 0) {
     fd_ = -1;
-    throw TrajectoryError(target_.string() + ": closing failed: " + systemError());
+    throw AtomicFileError(target_.string() + ": closing failed: " + systemError());
   }
   fd_ = -1;
   if (::rename(temp_.c_str(), target_.c_str()) != 0)
-    throw TrajectoryError(target_.string() + ": cannot rename " + temp_.string() + " to it: " + systemError());
+    throw AtomicFileError(target_.string() + ": cannot rename " + temp_.string() + " to it: " + systemError());
   committed_ = true;
   // The rename itself survives a crash once the directory is on disk.
   const std::filesystem::path dir = target_.has_parent_path() ? target_.parent_path() : std::filesystem::path(".");
