@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "batch_function_options.hpp"
+#include "service_helpers.hpp"
 #include "robodiff/batch/atomic_file.hpp"
 #include "commands.hpp"
 #include "function_options.hpp"
@@ -44,12 +45,6 @@ std::string fixed(double x, const char* format = "%.6g") {
   char buffer[48];
   std::snprintf(buffer, sizeof buffer, format, x);
   return buffer;
-}
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("--urdf " + path + ": cannot open the file");
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 struct UrdfOutcome {
@@ -186,7 +181,7 @@ void identify(const IdentifyArgs& args) {
       if (what == "building") std::cerr << "building the regressor (once per robot; cached afterwards)...\n";
     };
 
-  const std::string urdf_text = readText(args.robot.urdf);
+  const std::string urdf_text = readTextFile(args.robot.urdf, "--urdf");
   const Model model =
       loadUrdfString(urdf_text, args.robot.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, args.robot.urdf);
   const auto read_start = std::chrono::steady_clock::now();

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "batch_function_options.hpp"
+#include "service_helpers.hpp"
 #include "commands.hpp"
 #include "function_options.hpp"
 #include "human_units.hpp"
@@ -61,14 +62,6 @@ class InterruptFlag {
  private:
   struct sigaction old_int_ {}, old_term_ {};
 };
-
-std::string readText(const std::string& path, const char* flag) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(std::string(flag) + " " + path + ": cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return std::move(text).str();
-}
 
 std::string shape(const batch::BlockLayout& block) {
   std::string text = block.name + " " + std::to_string(block.rows);
@@ -150,7 +143,7 @@ void runTrajectory(const TrajectoryArgs& args) {
   if (!format) batch::outputFormatFor(args.out);  // throws naming the path when the extension says nothing
   batch::BatchFunctionOptions options = batchFunctionOptions(args.function);  // checks --backend first
 
-  const std::string urdf_text = readText(args.robot.urdf, "--urdf");
+  const std::string urdf_text = readTextFile(args.robot.urdf, "--urdf");
   const Model model =
       loadUrdfString(urdf_text, args.robot.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, args.robot.urdf);
   const FunctionSpec spec = loadFunctionSpec(args.spec);

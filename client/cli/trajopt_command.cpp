@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "batch_function_options.hpp"
+#include "service_helpers.hpp"
 #include "commands.hpp"
 #include "robodiff/batch/trajectory_optimization.hpp"
 #include "robodiff/batch/trajectory_optimization_csv.hpp"
@@ -31,14 +32,6 @@ struct TrajoptArgs {
   bool no_velocity_limits = false, torque_limits = false, json = false;
   std::vector<std::string> ipopt_options;  // NAME=VALUE
 };
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("--urdf: cannot read " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // --q0 / --qT: "v1,v2,..." (commas or spaces), or a state file STATE.json whose "q" is used.
 Eigen::VectorXd parseConfiguration(const std::string& text, const std::string& flag) {
@@ -100,7 +93,7 @@ void printSummary(std::ostream& out, const Model& model, const TrajoptArgs& args
 }
 
 void run(const TrajoptArgs& args) {
-  const std::string urdf_text = readText(args.urdf);
+  const std::string urdf_text = readTextFile(args.urdf, "--urdf");
   const Model model = loadUrdfString(urdf_text, RootJoint::Fixed, args.urdf);
 
   batch::TrajectoryOptimizationOptions options;
