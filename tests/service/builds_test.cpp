@@ -13,24 +13,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A compiler that says it is cc (so keys are cc's) and compiles only once `gate` exists.
-fs::path gatedCompiler(const TempDir& tmp, const fs::path& gate) {
-  return tmp.script("gated-cc",
-                    "case \"$1\" in --version|-v) exec cc \"$@\";; esac\n"
-                    "while [ ! -e '" +
-                        gate.string() +
-                        "' ]; do sleep 0.02; done\n"
-                        "exec cc \"$@\"\n");
-}
-
-// A compiler that fails like a real one.
-fs::path failingCompiler(const TempDir& tmp) {
-  return tmp.script("failing-cc",
-                    "case \"$1\" in --version|-v) echo 'failing-cc 1.0'; exit 0;; esac\n"
-                    "echo 'model.c:1:1: error: simulated failure' >&2\n"
-                    "exit 1\n");
-}
-
 void expectSameLayout(const rpc::GetFunctionReply& a, const rpc::GetFunctionReply& b) {
   ASSERT_EQ(a.inputs.size(), b.inputs.size());
   for (std::size_t i = 0; i < a.inputs.size(); ++i) {

@@ -72,6 +72,24 @@ inline bool waitFor(const std::function<bool()>& condition,
   return true;
 }
 
+// A compiler that says it is cc (so keys are cc's) and compiles only once `gate` exists.
+inline std::filesystem::path gatedCompiler(const TempDir& tmp, const std::filesystem::path& gate) {
+  return tmp.script("gated-cc",
+                    "case \"$1\" in --version|-v) exec cc \"$@\";; esac\n"
+                    "while [ ! -e '" +
+                        gate.string() +
+                        "' ]; do sleep 0.02; done\n"
+                        "exec cc \"$@\"\n");
+}
+
+// A compiler that fails like a real one.
+inline std::filesystem::path failingCompiler(const TempDir& tmp) {
+  return tmp.script("failing-cc",
+                    "case \"$1\" in --version|-v) echo 'failing-cc 1.0'; exit 0;; esac\n"
+                    "echo 'model.c:1:1: error: simulated failure' >&2\n"
+                    "exit 1\n");
+}
+
 // A temporary directory with the cache and the log file, and Services over them.
 class ServiceWorkspace {
  public:

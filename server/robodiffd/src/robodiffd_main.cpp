@@ -1,7 +1,7 @@
 // robodiffd: the robodiff service daemon. Reads its configuration (embedded defaults, a
 // file, flags), opens the cache, starts the build workers, serves over iceoryx (starting
 // a RouDi inside the process when none runs) and Cyclone DDS, answers operators over HTTP
-// (GET /metrics, /healthz, /readyz; 127.0.0.1:9464 by default), and on SIGTERM or SIGINT
+// (the dashboard at /, GET /metrics, /healthz, /readyz; 127.0.0.1:9464 by default), and on SIGTERM or SIGINT
 // drains: new requests get UNAVAILABLE, requests in flight are answered, then it exits 0.
 //
 // Exit codes: 0 stopped cleanly; 1 could not start (the log says why); 2 bad usage or
@@ -26,6 +26,7 @@
 #include "robodiff/batch/batch_job.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
+#include "robodiff/server/dashboard.hpp"
 #include "robodiff/server/dds_server.hpp"
 #include "robodiff/server/http_server.hpp"
 #include "robodiff/server/probes.hpp"
@@ -73,7 +74,7 @@ void addFlags(CLI::App& app, Flags& f) {
   app.add_option("--dds-domain", f.dds_domain, "DDS domain id (dds.domain)");
   app.add_flag("--no-dds", f.no_dds, "Do not serve over DDS (dds.enabled = false)");
   app.add_flag("--no-iceoryx", f.no_iceoryx, "Do not serve over iceoryx (iceoryx.enabled = false)");
-  app.add_option("--http", f.http, "Serve /metrics, /healthz, /readyz on this IPv4 host:port (http.listen)");
+  app.add_option("--http", f.http, "Serve the dashboard, /metrics, /healthz, /readyz on this IPv4 host:port (http.listen)");
   app.add_flag("--no-http", f.no_http, "No HTTP listener (http.enabled = false)");
   app.add_option("--roudi", f.roudi, "auto | external | embedded | detached (iceoryx.roudi)");
   app.add_flag("--interpreter-only", f.interpreter_only, "Never compile (build.compile = false)");
@@ -236,12 +237,14 @@ int main(int argc, char** argv) {
         return r;
       });
       probes.routeOn(*http);
+      routeDashboard(*http, service);
       // Not fatal: the transports are the service; a probe that cannot connect shows the problem.
       try {
         http->start();
         log.info("http_listening", {{"address", http->address()},
                                     {"port", static_cast<long long>(http->port())},
-                                    {"paths", "/metrics /healthz /readyz"}});
+                                    {"dashboard", "http://" + http->address() + "/"},
+                                    {"paths", "/ /api/overview /metrics /healthz /readyz"}});
       } catch (const std::exception& e) {
         log.error("http_failed", {{"message", e.what()}});
         http.reset();

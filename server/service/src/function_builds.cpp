@@ -74,6 +74,24 @@ BuildFigures FunctionBuilds::figures() const {
   return f;
 }
 
+std::vector<BuildFailureRecord> FunctionBuilds::recentFailures() const {
+  std::lock_guard lock(failures_mutex_);
+  return {failures_.begin(), failures_.end()};
+}
+
+void FunctionBuilds::keepFailure(const FunctionEntry& function, const std::string& message, bool interpreter_serves) {
+  BuildFailureRecord r;
+  r.when = std::chrono::system_clock::now();
+  r.function_id = function.id();
+  r.model = function.model().displayName();
+  r.function = function.functionName();
+  r.message = message;
+  r.interpreter_serves = interpreter_serves;
+  std::lock_guard lock(failures_mutex_);
+  failures_.push_front(std::move(r));
+  if (failures_.size() > kKeptFailures) failures_.pop_back();
+}
+
 void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   FunctionEntry& f = *function;
   if (stopping_) {
@@ -127,12 +145,17 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   if (!failure.ok()) {
     log_.warn("function_failed",
               {{"function_id", f.id()}, {"code", toString(failure.code)}, {"message", failure.message}});
+    keepFailure(f, failure.message, false);
     f.fail(failure.code, failure.message);
     return;
   }
   // Counted as queued before it is READY: whoever sees it READY sees its build coming.
   const bool build = settings_.compile && key_problem.empty();
-  if (build) builds_queued_.fetch_add(1, std::memory_order_relaxed);
+  if (build) {
+    builds_queued_.fetch_add(1, std::memory_order_relaxed);
+    f.setCompileStage(CompileStage::Queued);
+  }
+  f.setTraceSeconds(secondsSince(started));
   f.ready(evaluator);
   log_.info("function_traced", {{"function_id", f.id()},
                                 {"function", f.functionName()},
@@ -152,10 +175,13 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
 bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key) {
   FunctionEntry& f = *function;
   try {
+    const auto started = Clock::now();
     const std::optional<cache::Artifact> artifact = cache_.find(key);
     if (!artifact) return false;
     std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
     cache_hits_.fetch_add(1, std::memory_order_relaxed);
+    f.setCompileStage(CompileStage::Compiled);
+    f.setCompileSeconds(secondsSince(started), true);
     f.ready(std::move(compiled));
     log_.info("function_loaded",
               {{"function_id", f.id()}, {"function", f.functionName()}, {"key", key}, {"source", "cache"}});
@@ -184,6 +210,7 @@ void FunctionBuilds::compile(const std::shared_ptr<FunctionEntry>& function) {
     if (s.state == workers::BuildState::Building && !running.exchange(true)) {
       builds_queued_.fetch_sub(1, std::memory_order_relaxed);
       builds_running_.fetch_add(1, std::memory_order_relaxed);
+      f.setCompileStage(CompileStage::Compiling);
     }
   };
   workers::BuildStatus status;
@@ -219,6 +246,8 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
       if (!difference.empty()) throw std::runtime_error("its blocks differ from the traced function's: " + difference);
     }
     f.swap(std::move(compiled));
+    f.setCompileStage(CompileStage::Compiled);
+    f.setCompileSeconds(status.seconds, status.state == workers::BuildState::Cached);
   } catch (const std::exception& e) {
     buildFailed(function, std::string("the built library cannot be used: ") + e.what());
     return;
@@ -235,6 +264,8 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
 void FunctionBuilds::buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message) {
   FunctionEntry& f = *function;
   builds_failed_.fetch_add(1, std::memory_order_relaxed);
+  f.setCompileStage(CompileStage::Failed);
+  keepFailure(f, message, true);
   f.setMessage("building the library failed (the interpreter serves this function): " + message);
   log_.warn("build_failed", {{"function_id", f.id()}, {"function", f.functionName()}, {"message", message}});
 }

@@ -13,8 +13,11 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <vector>
 
 #include "function_entry.hpp"
 #include "robodiff/cache/cache.hpp"
@@ -39,6 +42,13 @@ struct BuildFigures {
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
 };
 
+// A build that failed, kept for the dashboard after its function is gone.
+struct BuildFailureRecord {
+  std::chrono::system_clock::time_point when;
+  std::string function_id, model, function, message;
+  bool interpreter_serves = false;  // only the library failed: the function still answers
+};
+
 class FunctionBuilds {
  public:
   FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log);
@@ -51,6 +61,9 @@ class FunctionBuilds {
   void stop();
 
   BuildFigures figures() const;
+  // The latest failures (tracing or compiling), newest first; at most kKeptFailures.
+  std::vector<BuildFailureRecord> recentFailures() const;
+  static constexpr std::size_t kKeptFailures = 20;
 
  private:
   void trace(const std::shared_ptr<FunctionEntry>& function);
@@ -59,6 +72,7 @@ class FunctionBuilds {
   void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status);
   void buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message);
   void cancelRunningBuilds();
+  void keepFailure(const FunctionEntry& function, const std::string& message, bool interpreter_serves);
 
   BuildSettings settings_;
   cache::Cache& cache_;
@@ -69,6 +83,8 @@ class FunctionBuilds {
 
   std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};
   std::atomic<std::uint32_t> builds_queued_{0}, builds_running_{0}, builds_failed_{0}, builds_done_{0};
+  mutable std::mutex failures_mutex_;
+  std::deque<BuildFailureRecord> failures_;  // newest first
 
   // Last: their threads use everything above and are joined first.
   TaskQueue compile_queue_;

@@ -2,6 +2,17 @@
 
 namespace robodiff::server::detail {
 
+const char* toString(CompileStage stage) {
+  switch (stage) {
+    case CompileStage::None: return "none";
+    case CompileStage::Queued: return "queued";
+    case CompileStage::Compiling: return "compiling";
+    case CompileStage::Compiled: return "compiled";
+    case CompileStage::Failed: return "failed";
+  }
+  return "unknown";
+}
+
 FunctionEntry::FunctionEntry(std::string id, std::shared_ptr<const ModelEntry> model, FunctionSpec spec,
                              std::string spec_text, std::uint64_t sequence)
     : id_(std::move(id)),
@@ -63,6 +74,34 @@ bool FunctionEntry::waitSettled(Clock::time_point deadline) const {
     return true;
   }
   return settled_.wait_until(lock, deadline, settled);
+}
+
+EvaluationFigures FunctionEntry::evaluationFigures() const {
+  EvaluationFigures f;
+  f.calls = call_latency_.count();
+  f.p50_ns = call_latency_.percentile(0.5);
+  f.p99_ns = call_latency_.percentile(0.99);
+  f.max_ns = call_latency_.max();
+  f.batch_calls = batch_calls_.load(std::memory_order_relaxed);
+  f.batch_knots = batch_knots_.load(std::memory_order_relaxed);
+  f.batch_ns = batch_ns_.load(std::memory_order_relaxed);
+  return f;
+}
+
+BuildTimes FunctionEntry::buildTimes() const {
+  std::lock_guard lock(mutex_);
+  return build_times_;
+}
+
+void FunctionEntry::setTraceSeconds(double seconds) {
+  std::lock_guard lock(mutex_);
+  build_times_.trace_seconds = seconds;
+}
+
+void FunctionEntry::setCompileSeconds(double seconds, bool from_cache) {
+  std::lock_guard lock(mutex_);
+  build_times_.compile_seconds = seconds;
+  build_times_.from_cache = from_cache;
 }
 
 }  // namespace robodiff::server::detail

@@ -12,12 +12,37 @@
 #include <string>
 
 #include "evaluator.hpp"
+#include "latency_histogram.hpp"
 #include "model_entry.hpp"
 #include "robodiff/functions/function_spec.hpp"
 #include "robodiff/schema/messages.hpp"
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::server::detail {
+
+// Where a READY function's compiled library stands (the dashboard's compile state).
+enum class CompileStage : std::uint8_t {
+  None,       // no library coming: compiling is off, or not decided yet
+  Queued,     // waiting for a build worker
+  Compiling,  // a worker builds it
+  Compiled,   // the library serves (built here, or found in the cache)
+  Failed,     // the build failed; the interpreter keeps serving (message() says why)
+};
+const char* toString(CompileStage stage);  // "none", "queued", ...
+
+// How long making it servable took; -1 where it did not happen (yet).
+struct BuildTimes {
+  double trace_seconds = -1;
+  double compile_seconds = -1;
+  bool from_cache = false;  // the library was found in the cache, not built for this request
+};
+
+// Evaluations as the service timed them (around the evaluator, checks included).
+struct EvaluationFigures {
+  std::uint64_t calls = 0;  // single Evaluate calls
+  std::uint64_t p50_ns = 0, p99_ns = 0, max_ns = 0;
+  std::uint64_t batch_calls = 0, batch_knots = 0, batch_ns = 0;
+};
 
 class FunctionEntry {
  public:
@@ -56,6 +81,20 @@ class FunctionEntry {
   // Knots evaluated.
   void countEvaluations(std::uint64_t knots) { evaluations_.fetch_add(knots, std::memory_order_relaxed); }
   std::uint64_t evaluations() const { return evaluations_.load(std::memory_order_relaxed); }
+  // Timings of single calls and batches (lock-free; a few instructions each).
+  void recordCall(std::uint64_t ns) { call_latency_.record(ns); }
+  void recordBatch(std::uint64_t knots, std::uint64_t ns) {
+    batch_calls_.fetch_add(1, std::memory_order_relaxed);
+    batch_knots_.fetch_add(knots, std::memory_order_relaxed);
+    batch_ns_.fetch_add(ns, std::memory_order_relaxed);
+  }
+  EvaluationFigures evaluationFigures() const;
+
+  CompileStage compileStage() const { return compile_stage_.load(std::memory_order_acquire); }
+  void setCompileStage(CompileStage stage) { compile_stage_.store(stage, std::memory_order_release); }
+  BuildTimes buildTimes() const;
+  void setTraceSeconds(double seconds);
+  void setCompileSeconds(double seconds, bool from_cache);
 
   // Released (no references left): builds not started yet are skipped.
   void markUnloaded() { unloaded_.store(true, std::memory_order_release); }
@@ -75,11 +114,15 @@ class FunctionEntry {
   std::atomic<std::shared_ptr<const Evaluator>> evaluator_;
   std::atomic<std::uint64_t> evaluations_{0};
   std::atomic<bool> unloaded_{false};
+  std::atomic<CompileStage> compile_stage_{CompileStage::None};
+  LatencyHistogram call_latency_;
+  std::atomic<std::uint64_t> batch_calls_{0}, batch_knots_{0}, batch_ns_{0};
 
-  mutable std::mutex mutex_;  // the failure, the message, and waiting for a state change
+  mutable std::mutex mutex_;  // the failure, the message, build times, and waiting for a state change
   mutable std::condition_variable settled_;
   Status failure_;
   std::string message_;
+  BuildTimes build_times_;
 };
 
 }  // namespace robodiff::server::detail

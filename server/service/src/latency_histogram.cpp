@@ -51,6 +51,13 @@ std::uint64_t LatencyHistogram::percentile(double fraction) const {
   return max();
 }
 
+std::vector<std::pair<std::uint64_t, std::uint64_t>> LatencyHistogram::occupied() const {
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> out;
+  for (std::size_t b = 0; b < kBuckets; ++b)
+    if (const std::uint64_t n = buckets_[b].load(std::memory_order_relaxed); n != 0) out.emplace_back(upperBound(b), n);
+  return out;
+}
+
 LatencyHistogram::Cumulative LatencyHistogram::cumulative(std::span<const std::uint64_t> bounds_ns) const {
   Cumulative out;
   out.counts.assign(bounds_ns.size(), 0);

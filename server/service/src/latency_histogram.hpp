@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace robodiff::server::detail {
@@ -31,6 +32,10 @@ class LatencyHistogram {
     std::uint64_t sum_ns = 0;
   };
   Cumulative cumulative(std::span<const std::uint64_t> bounds_ns) const;
+
+  // The buckets holding latencies, ascending: (upper bound in ns, count). A reader that
+  // keeps two of these apart in time gets the histogram of the latencies in between.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> occupied() const;
 
   // Bucket arithmetic, exposed for tests: index of a value, and a bucket's largest value.
   static std::size_t bucketOf(std::uint64_t ns);

@@ -24,6 +24,13 @@ struct ModelEntry {
   // Guarded by the registry's mutex.
   std::uint32_t references = 0;  // LoadModel calls not yet released
   std::uint32_t functions = 0;   // loaded functions of this model (they keep it loaded)
+
+  // What a person calls it: the URDF's robot name, with the source name when one was given.
+  std::string displayName() const {
+    const std::string robot = model ? model->name : std::string();
+    if (source_name.empty() || source_name == "<urdf>" || source_name == robot) return robot;
+    return robot.empty() ? source_name : robot + " (" + source_name + ")";
+  }
 };
 
 }  // namespace robodiff::server::detail

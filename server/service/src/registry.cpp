@@ -104,6 +104,27 @@ std::vector<std::shared_ptr<FunctionEntry>> Registry::functions(std::optional<st
   return out;
 }
 
+std::vector<Registry::ModelView> Registry::modelViews() const {
+  std::vector<ModelView> out;
+  {
+    std::shared_lock lock(mutex_);
+    for (const auto& [id, m] : models_) out.push_back({m, m->references, m->functions});
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.model->id < b.model->id; });
+  return out;
+}
+
+std::vector<Registry::FunctionView> Registry::functionViews() const {
+  std::vector<FunctionView> out;
+  {
+    std::shared_lock lock(mutex_);
+    for (const auto& [id, f] : functions_) out.push_back({f, f->references});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const auto& a, const auto& b) { return a.function->sequence() < b.function->sequence(); });
+  return out;
+}
+
 std::size_t Registry::modelCount() const {
   std::shared_lock lock(mutex_);
   return models_.size();

@@ -59,6 +59,17 @@ class Registry {
 
   // Loaded functions in order of creation; those of one model when model_id is set.
   std::vector<std::shared_ptr<FunctionEntry>> functions(std::optional<std::string_view> model_id = std::nullopt) const;
+  // Snapshots with the counts the mutex guards (for the dashboard).
+  struct ModelView {
+    std::shared_ptr<const ModelEntry> model;
+    std::uint32_t references = 0, functions = 0;
+  };
+  struct FunctionView {
+    std::shared_ptr<const FunctionEntry> function;
+    std::uint32_t references = 0;
+  };
+  std::vector<ModelView> modelViews() const;        // by id
+  std::vector<FunctionView> functionViews() const;  // in order of creation
   std::size_t modelCount() const;
   std::size_t functionCount() const;
 

@@ -116,6 +116,7 @@ Status Service::evaluate(const CallContext& ctx, std::string_view function_id, s
                          std::span<double> outputs) {
   State& s = *state_;
   const InFlight in_flight(s.in_flight);
+  const auto started = Clock::now();
   if (ctx.expired()) return detail::deadlineExceeded(ctx, "Evaluate");
   std::shared_ptr<FunctionEntry> function;
   std::shared_ptr<const Evaluator> evaluator;
@@ -132,6 +133,8 @@ Status Service::evaluate(const CallContext& ctx, std::string_view function_id, s
   for (std::size_t blk = 0; blk < n_out; ++blk) b.out_ptr[blk] = outputs.data() + layout.output_offsets[blk];
   evaluator->evaluate(b.in_ptr.data(), b.out_ptr.data(), grown(b.work, evaluator->workSize()));
   function->countEvaluations(1);
+  function->recordCall(static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - started).count()));
   return {};
 }
 
@@ -141,6 +144,7 @@ Status Service::evaluateBatch(const CallContext& ctx, std::string_view function_
                               std::span<const double> inputs, std::span<double> outputs) {
   State& s = *state_;
   const InFlight in_flight(s.in_flight);
+  const auto started = Clock::now();
   if (ctx.expired()) return detail::deadlineExceeded(ctx, "EvaluateBatch");
   std::shared_ptr<FunctionEntry> function;
   std::shared_ptr<const Evaluator> evaluator;
@@ -183,6 +187,8 @@ Status Service::evaluateBatch(const CallContext& ctx, std::string_view function_
     s.batch.run(pieces, threads - 1, run);
 
   function->countEvaluations(done.load());
+  function->recordBatch(done.load(), static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                         Clock::now() - started).count()));
   if (expired.load())
     return {StatusCode::DeadlineExceeded, "EvaluateBatch: the deadline passed after " + std::to_string(done.load()) +
                                               " of " + std::to_string(knots) + " knots"};

@@ -72,6 +72,49 @@ struct ServiceMetrics {
   JobCounts jobs;
 };
 
+// What the dashboard shows (server/http renders it as JSON for GET /api/overview): the
+// metrics, and per model, function, failed build and job what a person needs to see.
+struct ServiceOverview {
+  struct Model {
+    std::string id, name;  // name: the URDF's robot name (with the source name when given)
+    bool floating_base = false;
+    std::uint32_t nq = 0, nv = 0, joints = 0, frames = 0;
+    std::uint32_t references = 0, functions = 0;
+  };
+  struct Function {
+    std::string id, model_id, model_name;
+    std::string function;  // "rnea"
+    std::string outputs;   // "value, jacobian[q,v,a]"
+    // tracing | queued | compiling | compiled | interpreted | build-failed | failed
+    std::string phase;
+    std::string message;   // why it failed, or why the interpreter serves
+    std::uint32_t references = 0;
+    std::uint64_t evaluations = 0;  // knots, single and batched
+    std::uint64_t calls = 0, p50_ns = 0, p99_ns = 0, max_ns = 0;  // single Evaluate calls, timed in the service
+    std::uint64_t batch_calls = 0, batch_knots = 0, batch_ns = 0;
+    double trace_seconds = -1, compile_seconds = -1;  // -1: not (yet) done
+    bool from_cache = false;                          // the library came from the cache
+  };
+  struct BuildFailure {
+    double unix_seconds = 0;
+    std::string function_id, model, function, message;
+    bool interpreter_serves = false;
+  };
+  struct MethodLatency {
+    rpc::Method method = rpc::Method::Health;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> buckets;  // (upper bound ns, count), since start
+  };
+  std::string instance_id, version;
+  ServiceMetrics metrics;
+  std::vector<rpc::MethodStats> methods;     // p50/p90/p99 since start, per method
+  std::vector<MethodLatency> latencies;      // fine histograms: a reader differences two
+  std::vector<Model> models;
+  std::vector<Function> functions;           // in order of creation
+  std::vector<BuildFailure> build_failures;  // newest first, the latest 20
+  std::vector<rpc::JobInfo> jobs;            // newest first, at most max_jobs
+  std::string jobs_error;                    // the job index could not be read
+};
+
 class Service final : public ServiceApi {
  public:
   // Opens the cache and starts the worker pool and the threads. Throws
@@ -92,6 +135,8 @@ class Service final : public ServiceApi {
   const ServiceOptions& options() const;
   // The figures for a metrics endpoint; cheap (atomics, a cache stats query), any thread.
   ServiceMetrics metrics() const;
+  // The dashboard's snapshot; any thread (reads the cache's stats and the job index).
+  ServiceOverview overview(std::size_t max_jobs = 50) const;
 
   // ServiceApi
   const std::string& instanceId() const override;
