@@ -12,6 +12,7 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
   coinor-libipopt-dev libspdlog-dev libfmt-dev libzstd-dev libtbb-dev
   clang tcc
+  chromium chromium-driver  # the dashboard's test runs the page in headless Chromium
 )
 
 missing=()
