@@ -10,6 +10,7 @@
 #include <regex>
 
 #include "http/http_client.hpp"
+#include "http/serving_service.hpp"
 #include "robodiff/server/dashboard.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
@@ -131,50 +132,37 @@ TEST(Dashboard, ThePageHoldsItsElementsAndLoadsNothingFromElsewhere) {
 }
 
 TEST(Dashboard, RoutesServeThePageAndTheOverviewOfARealService) {
-  TempDir tmp;
-  std::FILE* log_file = std::fopen((tmp / "service.log").c_str(), "w");
-  ASSERT_NE(log_file, nullptr);
-  {
-    server::Logger log(log_file);
-    server::ServiceOptions o;
-    o.cache_dir = tmp / "cache";
-    o.worker_executable = workerPath().string();
-    o.compile = false;
-    o.job_workers = 0;
-    server::Service service(o, log);
-    service.markServing();
-    rpc::LoadModelRequest load;
-    load.urdf = readFile(sourceDir() / "examples/robots/arm7.urdf");
-    load.options_json = R"({"source_name": "arm7.urdf"})";
-    rpc::LoadModelReply model;
-    server::CallContext ctx;
-    ASSERT_TRUE(service.loadModel(ctx, load, model).ok());
+  ServingService service;
+  rpc::LoadModelRequest load;
+  load.urdf = readFile(sourceDir() / "examples/robots/arm7.urdf");
+  load.options_json = R"({"source_name": "arm7.urdf"})";
+  rpc::LoadModelReply model;
+  server::CallContext ctx;
+  ASSERT_TRUE(service->loadModel(ctx, load, model).ok());
 
-    server::HttpServerOptions options;
-    options.port = 0;
-    server::HttpServer http(options);
-    server::routeDashboard(http, service);
-    http.start();
+  server::HttpServerOptions options;
+  options.port = 0;
+  server::HttpServer http(options);
+  server::routeDashboard(http, *service);
+  http.start();
 
-    for (const char* path : {"/", "/dashboard"}) {
-      const HttpReply page = httpGet(http.port(), path);
-      EXPECT_EQ(page.status, 200) << path;
-      EXPECT_EQ(page.header("Content-Type"), "text/html; charset=utf-8") << path;
-      EXPECT_EQ(page.body, std::string(server::dashboardPage())) << path;
-    }
-    const HttpReply overview = httpGet(http.port(), "/api/overview");
-    ASSERT_EQ(overview.status, 200);
-    EXPECT_EQ(overview.header("Content-Type"), "application/json");
-    const json j = json::parse(overview.body);
-    EXPECT_EQ(j["state"], "SERVING");
-    ASSERT_EQ(j["models"].size(), 1u);
-    EXPECT_EQ(j["models"][0]["id"], model.model_id);
-    EXPECT_EQ(j["models"][0]["name"], "arm7 (arm7.urdf)");
-    EXPECT_FALSE(j["jobs_enabled"].get<bool>());
-    EXPECT_EQ(httpGet(http.port(), "/dashboard.js").status, 404);
-    http.stop();
+  for (const char* path : {"/", "/dashboard"}) {
+    const HttpReply page = httpGet(http.port(), path);
+    EXPECT_EQ(page.status, 200) << path;
+    EXPECT_EQ(page.header("Content-Type"), "text/html; charset=utf-8") << path;
+    EXPECT_EQ(page.body, std::string(server::dashboardPage())) << path;
   }
-  std::fclose(log_file);
+  const HttpReply overview = httpGet(http.port(), "/api/overview");
+  ASSERT_EQ(overview.status, 200);
+  EXPECT_EQ(overview.header("Content-Type"), "application/json");
+  const json j = json::parse(overview.body);
+  EXPECT_EQ(j["state"], "SERVING");
+  ASSERT_EQ(j["models"].size(), 1u);
+  EXPECT_EQ(j["models"][0]["id"], model.model_id);
+  EXPECT_EQ(j["models"][0]["name"], "arm7 (arm7.urdf)");
+  EXPECT_FALSE(j["jobs_enabled"].get<bool>());
+  EXPECT_EQ(httpGet(http.port(), "/dashboard.js").status, 404);
+  http.stop();
 }
 
 }  // namespace

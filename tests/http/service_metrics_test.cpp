@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "http/serving_service.hpp"
 #include "robodiff/server/service.hpp"
 #include "robodiff/server/service_metrics_text.hpp"
 #include "support/prometheus_text.hpp"
@@ -16,57 +17,44 @@ namespace {
 using namespace std::chrono_literals;
 
 TEST(ServiceMetrics, RecordedRequestsBecomeCountersAndBuckets) {
-  TempDir tmp;
-  std::FILE* log_file = std::fopen((tmp / "service.log").c_str(), "w");
-  ASSERT_NE(log_file, nullptr);
-  {
-    server::Logger log(log_file);
-    server::ServiceOptions o;
-    o.cache_dir = tmp / "cache";
-    o.worker_executable = workerPath().string();
-    o.compile = false;
-    o.job_workers = 0;
-    server::Service service(o, log);
-    service.markServing();
-    // 3 fast OK Evaluates (2 us, 40 us, 3 ms), one NOT_FOUND, one LoadModel of 2 s.
-    service.recordRequest("iceoryx", rpc::Method::Evaluate, StatusCode::Ok, 2us);
-    service.recordRequest("iceoryx", rpc::Method::Evaluate, StatusCode::Ok, 40us);
-    service.recordRequest("dds", rpc::Method::Evaluate, StatusCode::Ok, 3ms);
-    service.recordRequest("dds", rpc::Method::Evaluate, StatusCode::NotFound, 1us);
-    service.recordRequest("dds", rpc::Method::LoadModel, StatusCode::Ok, 2s);
+  ServingService service;
+  // 3 fast OK Evaluates (2 us, 40 us, 3 ms), one NOT_FOUND, one LoadModel of 2 s.
+  service->recordRequest("iceoryx", rpc::Method::Evaluate, StatusCode::Ok, 2us);
+  service->recordRequest("iceoryx", rpc::Method::Evaluate, StatusCode::Ok, 40us);
+  service->recordRequest("dds", rpc::Method::Evaluate, StatusCode::Ok, 3ms);
+  service->recordRequest("dds", rpc::Method::Evaluate, StatusCode::NotFound, 1us);
+  service->recordRequest("dds", rpc::Method::LoadModel, StatusCode::Ok, 2s);
 
-    const server::ServiceMetrics m = service.metrics();
-    ASSERT_EQ(m.methods.size(), rpc::kMethodCount);
-    const auto& evaluate = m.methods[static_cast<std::size_t>(rpc::Method::Evaluate)];
-    EXPECT_EQ(evaluate.latency_count, 4u);
-    EXPECT_NEAR(evaluate.latency_sum_seconds, 3.043e-3, 1e-9);
-    ASSERT_EQ(evaluate.latency_buckets.size(), m.latency_bounds_seconds.size());
-    auto bucketAt = [&](double le) {
-      for (std::size_t i = 0; i < m.latency_bounds_seconds.size(); ++i)
-        if (std::abs(m.latency_bounds_seconds[i] - le) < 1e-12) return evaluate.latency_buckets[i];
-      ADD_FAILURE() << "no bound " << le;
-      return std::uint64_t{0};
-    };
-    EXPECT_EQ(bucketAt(5e-6), 2u);    // 1 us, 2 us
-    EXPECT_EQ(bucketAt(5e-5), 3u);    // + 40 us
-    EXPECT_EQ(bucketAt(2.5e-3), 3u);  // 3 ms is above
-    EXPECT_EQ(bucketAt(5e-3), 4u);
-    EXPECT_EQ(m.state, rpc::ServingState::Serving);
+  const server::ServiceMetrics m = service->metrics();
+  ASSERT_EQ(m.methods.size(), rpc::kMethodCount);
+  const auto& evaluate = m.methods[static_cast<std::size_t>(rpc::Method::Evaluate)];
+  EXPECT_EQ(evaluate.latency_count, 4u);
+  EXPECT_NEAR(evaluate.latency_sum_seconds, 3.043e-3, 1e-9);
+  ASSERT_EQ(evaluate.latency_buckets.size(), m.latency_bounds_seconds.size());
+  auto bucketAt = [&](double le) {
+    for (std::size_t i = 0; i < m.latency_bounds_seconds.size(); ++i)
+      if (std::abs(m.latency_bounds_seconds[i] - le) < 1e-12) return evaluate.latency_buckets[i];
+    ADD_FAILURE() << "no bound " << le;
+    return std::uint64_t{0};
+  };
+  EXPECT_EQ(bucketAt(5e-6), 2u);    // 1 us, 2 us
+  EXPECT_EQ(bucketAt(5e-5), 3u);    // + 40 us
+  EXPECT_EQ(bucketAt(2.5e-3), 3u);  // 3 ms is above
+  EXPECT_EQ(bucketAt(5e-3), 4u);
+  EXPECT_EQ(m.state, rpc::ServingState::Serving);
 
-    const PromText p = parsePrometheusText(server::serviceMetricsText(m));
-    ASSERT_TRUE(p.errors.empty()) << p.errorText();
-    EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "OK"}}), 3.0);
-    EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "NOT_FOUND"}}), 1.0);
-    EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Health"}, {"status", "OK"}}), 0.0);
-    EXPECT_EQ(p.value("robodiff_request_duration_seconds_bucket", {{"method", "LoadModel"}, {"le", "1"}}), 0.0);
-    EXPECT_EQ(p.value("robodiff_request_duration_seconds_bucket", {{"method", "LoadModel"}, {"le", "2.5"}}), 1.0);
-    EXPECT_EQ(p.value("robodiff_transport_requests_total", {{"transport", "dds"}}), 3.0);
-    EXPECT_EQ(p.value("robodiff_transport_errors_total", {{"transport", "dds"}}), 1.0);
-    EXPECT_EQ(p.value("robodiff_cache_entries"), 0.0);
-    EXPECT_EQ(p.value("robodiff_workers", {{"state", "idle"}}), 1.0);
-    EXPECT_EQ(p.family("robodiff_jobs")->samples.size(), 0u);  // jobs off
-  }
-  std::fclose(log_file);
+  const PromText p = parsePrometheusText(server::serviceMetricsText(m));
+  ASSERT_TRUE(p.errors.empty()) << p.errorText();
+  EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "OK"}}), 3.0);
+  EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "NOT_FOUND"}}), 1.0);
+  EXPECT_EQ(p.value("robodiff_requests_total", {{"method", "Health"}, {"status", "OK"}}), 0.0);
+  EXPECT_EQ(p.value("robodiff_request_duration_seconds_bucket", {{"method", "LoadModel"}, {"le", "1"}}), 0.0);
+  EXPECT_EQ(p.value("robodiff_request_duration_seconds_bucket", {{"method", "LoadModel"}, {"le", "2.5"}}), 1.0);
+  EXPECT_EQ(p.value("robodiff_transport_requests_total", {{"transport", "dds"}}), 3.0);
+  EXPECT_EQ(p.value("robodiff_transport_errors_total", {{"transport", "dds"}}), 1.0);
+  EXPECT_EQ(p.value("robodiff_cache_entries"), 0.0);
+  EXPECT_EQ(p.value("robodiff_workers", {{"state", "idle"}}), 1.0);
+  EXPECT_EQ(p.family("robodiff_jobs")->samples.size(), 0u);  // jobs off
 }
 
 }  // namespace
