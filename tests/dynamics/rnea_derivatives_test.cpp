@@ -1,6 +1,7 @@
 // The analytic RNEA derivatives (dynamics/rnea_derivatives.hpp) against Pinocchio's
 // computeRNEADerivatives in ../shared/golden (1e-9), and against central differences of
-// rnea on the project's own robots (prismatic joints, a free-flyer, a branched tree).
+// rnea on the project's own robots (prismatic joints, a free-flyer, a branched tree); the
+// tau of the same sweep against Pinocchio's and against rnea (local frames).
 #include <random>
 
 #include <gtest/gtest.h>
@@ -30,6 +31,7 @@ TEST_P(RneaDerivativesGolden, MatchPinocchio) {
     EXPECT_TRUE(matricesAgree(dq, x.dtau_dq, 1e-9));
     EXPECT_TRUE(matricesAgree(dv, x.dtau_dv, 1e-9));
     EXPECT_TRUE(matricesAgree(da, x.M, 1e-9));
+    EXPECT_TRUE(matricesAgree(data.tau, x.tau, 1e-9));  // tau from the same (world-frame) sweep
   }
 }
 
@@ -48,6 +50,8 @@ TEST_P(RneaDerivativesFiniteDifferences, MatchCentralDifferences) {
     const Eigen::VectorXd a = Eigen::VectorXd::NullaryExpr(model.nv, [&] { return u(rng); });
     MatX<double> dq, dv, da;
     computeRneaDerivatives(model, data, q, v, a, dq, dv, da);
+    const Eigen::VectorXd sweep_tau = data.tau;
+    EXPECT_TRUE(matricesAgree(sweep_tau, rnea(model, data, q, v, a), 1e-12));  // the local-frame RNEA
     const double h = 1e-6;
     Eigen::MatrixXd fq(model.nv, model.nv), fv(model.nv, model.nv);
     // rnea returns data.tau: copy before the next call.

@@ -14,6 +14,10 @@
 //     d tau_i/d a_c =  (Y_i S_i) . S_c
 //   and for a row r of a strict ancestor of J: S_r . (S_c x* F_J - Y_J xi_c - B_J w_c),
 //   S_r . (B_J S_c - Y_J zeta_c) and S_r . (Y_J S_c).
+// Two savings in operations (the traced code is what they are for): B_K is a symmetric
+// part plus w -> w x* h_K, h_K the subtree's momentum, which is antisymmetric, so
+// B_J S_c = B_J^T S_c + 2 S_c x* h_J reuses the row quantity Q_c; and for a joint of one
+// velocity coordinate v_J - v_p is S_c qdot_c, so zeta_c = 2 w_c.
 // The q-derivative of a free-flyer is in the tangent space (the golden files'
 // convention). Branch-free on values, so symbolic scalars trace it unchanged: this is
 // what generated RNEA and ABA Jacobians are built from (core/functions/README.md).
@@ -59,7 +63,9 @@ template <class S> S pair(const Motion<S>& m, const Force<S>& f) { return m.line
 
 }  // namespace detail
 
-// The three nv x nv partials of rnea(model, data, q, v, a) (tau itself is data.tau).
+// The three nv x nv partials of rnea(model, data, q, v, a), and tau itself in data.tau
+// from the same sweep (tau_c = S_c . F_J, F_J the world-frame force on J's subtree), so a
+// caller wanting value and derivatives needs no second RNEA.
 template <class S, class Q, class V, class A>
 void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
                             const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a, MatX<S>& dtau_dq,
@@ -67,7 +73,7 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
   using detail::pair;
   const int n = model.njoints(), nv = model.nv;
   std::vector<Motion<S>> ov(n), oa(n);
-  std::vector<Force<S>> oF(n);
+  std::vector<Force<S>> oF(n), oh(n);  // forces and momenta, then their subtree sums
   std::vector<InertiaSum<S>> oY(n);
   std::vector<Mat6<S>> oB(n);
   const Motion<S> a0 = gravityAcceleration<S>(model);
@@ -93,6 +99,7 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
     oa[j] = ap + arel + ov[j].cross(vrel);
     oY[j] = worldInertia(model.bodies[j], data.oMi[j]);
     const Force<S> h = oY[j] * ov[j];
+    oh[j] = h;
     oF[j] = oY[j] * oa[j] + ov[j].cross(h);
     // (v x*) I - I (v x) = X + X^T with X = (v x*) I, since (v x*)^T = -(v x) and I is
     // symmetric: one 6 x 6 product instead of two.
@@ -105,8 +112,15 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
     if (p < 0) continue;
     oY[p] += oY[j];
     oF[p] += oF[j];
+    oh[p] += oh[j];
     oB[p] += oB[j];
   }
+  data.tau.resize(nv);
+  for (int j = 0; j < n; ++j)
+    for (int k = 0; k < model.joints[j].nv; ++k) {
+      const int c = model.joints[j].idx_v + k;
+      data.tau[c] = pair(column(c), oF[j]);
+    }
   // Per row i: P_i = Y_i S_i and Q_i = B_i^T S_i (B_i, Y_i: composites of i's joint).
   std::vector<Force<S>> P(nv), Qf(nv);
   for (int j = 0; j < n; ++j)
@@ -128,7 +142,7 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
       const Motion<S> s = column(c);
       const Motion<S> w = s.cross(vp);
       const Motion<S> xi = s.cross(ap) - w.cross(vp);
-      const Motion<S> zeta = s.cross(vp + ov[J]);
+      const Motion<S> zeta = joint.nv == 1 ? w + w : s.cross(vp + ov[J]);
       for (int i = joint.idx_v; i < end; ++i) {
         dtau_dq(i, c) = -pair(xi, P[i]) - pair(w, Qf[i]);
         dtau_dv(i, c) = pair(s, Qf[i]) - pair(zeta, P[i]);
@@ -136,7 +150,8 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
       }
       if (joint.parent < 0) continue;
       const Force<S> G = s.cross(oF[J]) - oY[J] * xi - Force<S>::fromVector(oB[J] * w.toVector());
-      const Force<S> H = Force<S>::fromVector(oB[J] * s.toVector()) - oY[J] * zeta;
+      const Force<S> sh = s.cross(oh[J]);
+      const Force<S> H = Qf[c] + sh + sh - oY[J] * zeta;  // B_J S_c = Q_c + 2 S_c x* h_J
       const Force<S> YS = oY[J] * s;
       for (int r_joint = joint.parent; r_joint >= 0; r_joint = model.joints[r_joint].parent)
         for (int kr = 0; kr < model.joints[r_joint].nv; ++kr) {
