@@ -1,6 +1,7 @@
 // Built functions against Pinocchio's derivatives in ../shared/golden (1e-9): RNEA
 // d tau/d(q, v, a) and ABA d ddq/d(q, v, tau), fixed and floating base; ABA's analytic
-// Jacobian equals the differentiated one and is the smaller graph.
+// Jacobian equals the differentiated one and is the smaller graph; the RNEA Jacobian is
+// the cheaper of its two ways, which agree.
 #include <iostream>
 
 #include <Eigen/LU>
@@ -27,11 +28,7 @@ FunctionSpec jacobianSpec(ModelFunction fn) {
                            R"("]}]})");
 }
 
-std::size_t operations(const BuiltFunction& f) {
-  std::vector<symbolic::NodeId> all;
-  for (const codegen::OutputBlock& b : f.definition.outputs) all.insert(all.end(), b.values.begin(), b.values.end());
-  return symbolic::coneSize(*f.graph, all).operations;
-}
+std::size_t operations(const BuiltFunction& f) { return builtOperations(f); }
 
 class Golden : public ::testing::TestWithParam<std::string> {};
 
@@ -83,6 +80,49 @@ TEST(AbaJacobian, AnalyticIsSmallerAndEqualToDifferentiated) {
     codegen::Interpreter a(*analytic.graph, analytic.definition), d(*direct.graph, direct.definition);
     EXPECT_TRUE(matricesAgree(evaluateBlocks(a, analytic.definition, {x.q, x.v, x.tau})[1],
                               evaluateBlocks(d, direct.definition, {x.q, x.v, x.tau})[1], 1e-10));
+  }
+}
+
+// The RNEA Jacobian is built both ways (the analytic derivatives with their sweep's tau,
+// and differentiation of the traced RNEA); the default keeps the analytic one when it
+// saves enough operations (kAnalyticRneaOperationsRatio), and the two agree (independent
+// algorithms). The Talos, fixed and free-flying, goes analytic; the Panda and the UR5 do not.
+TEST(RneaJacobian, TheCheaperOfAnalyticAndDifferentiatedIsKeptAndBothAgree) {
+  ROBODIFF_REQUIRE_SHARED(shared);
+  for (const char* name : {"panda", "ur5", "talos", "talos_ff"}) {
+    SCOPED_TRACE(name);
+    const testing::GoldenRobot golden = testing::loadGolden(shared, name);
+    const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
+    const FunctionSpec spec = jacobianSpec(ModelFunction::Rnea);
+    FunctionBuilderOptions analytic_options, differentiate_options;
+    analytic_options.rnea_jacobian = RneaJacobianMethod::Analytic;
+    differentiate_options.rnea_jacobian = RneaJacobianMethod::Differentiate;
+    const BuiltFunction analytic = buildFunction(model, spec, analytic_options);
+    const BuiltFunction differentiated = buildFunction(model, spec, differentiate_options);
+    const BuiltFunction chosen = buildFunction(model, spec);
+    std::cout << name << " RNEA value + Jacobian: analytic " << operations(analytic) << " operations, differentiated "
+              << operations(differentiated) << "; kept: " << chosen.method << "\n";
+    const bool analytic_kept = static_cast<double>(operations(analytic)) <=
+                               kAnalyticRneaOperationsRatio * static_cast<double>(operations(differentiated));
+    EXPECT_EQ(operations(chosen), analytic_kept ? operations(analytic) : operations(differentiated));
+    EXPECT_NE(chosen.method.find(analytic_kept ? "Jacobian from analytic" : "Jacobian by symbolic differentiation"),
+              std::string::npos)
+        << chosen.method;
+    codegen::Interpreter a(*analytic.graph, analytic.definition), d(*differentiated.graph, differentiated.definition);
+    for (std::size_t s = 0; s < golden.samples.size(); s += 5) {
+      const auto& x = golden.samples[s];
+      const auto from_a = evaluateBlocks(a, analytic.definition, {x.q, x.v, x.a});
+      const auto from_d = evaluateBlocks(d, differentiated.definition, {x.q, x.v, x.a});
+      EXPECT_TRUE(matricesAgree(from_a[0], from_d[0], 1e-12));  // tau: world-frame sweep against local-frame RNEA
+      EXPECT_TRUE(matricesAgree(from_a[1], from_d[1], 1e-10));
+    }
+  }
+  // The measurements this choice was made on (bench, README): the Talos goes analytic,
+  // the Panda not.
+  for (const auto& [name, analytic] : {std::pair{"talos", true}, std::pair{"panda", false}}) {
+    const testing::GoldenRobot golden = testing::loadGolden(shared, name);
+    const std::string method = buildFunction(loadUrdfFile(golden.urdf.string()), jacobianSpec(ModelFunction::Rnea)).method;
+    EXPECT_EQ(method.find("Jacobian from analytic") != std::string::npos, analytic) << name << ": " << method;
   }
 }
 

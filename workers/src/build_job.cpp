@@ -109,7 +109,12 @@ cache::EntryInfo entryInfoFromJson(const json& j, const std::string& where) {
 
 const char* methodName(AbaJacobianMethod m) { return m == AbaJacobianMethod::Analytic ? "analytic" : "differentiate"; }
 const char* methodName(RneaJacobianMethod m) {
-  return m == RneaJacobianMethod::Analytic ? "analytic" : "differentiate";
+  switch (m) {
+    case RneaJacobianMethod::Analytic: return "analytic";
+    case RneaJacobianMethod::Differentiate: return "differentiate";
+    case RneaJacobianMethod::Cheaper: return "cheaper";
+  }
+  return "unknown";
 }
 
 // The generator's version and every builder and codegen option that changes the code

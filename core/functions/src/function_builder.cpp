@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "robodiff/dynamics/rnea_derivatives.hpp"
 #include "robodiff/functions/model_function.hpp"
+#include "robodiff/symbolic/cone.hpp"
 #include "robodiff/symbolic/configuration.hpp"
 #include "robodiff/symbolic/hessian.hpp"
 #include "robodiff/symbolic/substitute.hpp"
@@ -79,7 +81,10 @@ struct Trace {
 
 }  // namespace
 
-BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+namespace {
+
+// One build with the methods `options` names (never RneaJacobianMethod::Cheaper).
+BuiltFunction buildOneWay(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
   const FunctionInfo& info = functionInfo(spec.function);
   const int frame = resolveFrame(model, spec);
   const auto [rows, cols] = valueShape(model, spec.function);
@@ -162,6 +167,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   std::vector<NodeId> minv;
   // "q" / "v" / "a" -> nv x nv row-major partials of RNEA, in the trace graph.
   std::map<std::string, std::vector<NodeId>> rnea_partials;
+  std::vector<NodeId> analytic_tau;  // RNEA's value from the analytic sweep (world frame)
   auto analyticPartials = [&](const VecX<Sym>& a) {
     Data<Sym> d(model);
     MatX<Sym> dq, dv, da;
@@ -169,6 +175,7 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
     rnea_partials["q"] = tracer.outputs(dq);
     rnea_partials["v"] = tracer.outputs(dv);
     rnea_partials["a"] = tracer.outputs(da);
+    analytic_tau = tracer.outputs(d.tau);
   };
   bool a_star_used = false;
   std::uint32_t a_star_first = 0;
@@ -242,7 +249,9 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   out.setNodeLimit(options.node_limit);
   std::vector<NodeId> input_map(g.inputCount(), out.zero());
   for (int i = 0; i < runtime_inputs; ++i) input_map[i] = out.input(static_cast<std::uint32_t>(i));
-  std::vector<NodeId> value = symbolic::copyCone(g, trace->value, out, input_map);
+  // The traced value, where an output or the ABA Jacobian uses it.
+  const std::vector<NodeId> value =
+      rnea_from_partials ? std::vector<NodeId>{} : symbolic::copyCone(g, trace->value, out, input_map);
 
   std::vector<std::vector<NodeId>> entries(spec.outputs.size());
   if (aba_analytic) {
@@ -270,8 +279,11 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
       if (o.kind == OutputKind::Jacobian) entries[k] = sideBySide(blocks, o.wrt, n);
     }
   }
+  // RNEA with analytic partials: its value from the same sweep, not a second RNEA.
+  const std::vector<NodeId> analytic_value =
+      rnea_from_partials ? symbolic::copyCone(g, analytic_tau, out, input_map) : std::vector<NodeId>{};
   for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
-    if (spec.outputs[k].kind == OutputKind::Value) entries[k] = value;
+    if (spec.outputs[k].kind == OutputKind::Value) entries[k] = rnea_from_partials ? analytic_value : value;
     else if (!trace_outputs[k].empty()) entries[k] = symbolic::copyCone(g, trace_outputs[k], out, input_map);
   }
   const std::vector<std::string> variable_names = trace->variable_names;
@@ -355,6 +367,53 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
   built.method = std::move(method);
   built.timings.assemble_seconds = secondsSince(t_assemble);
   return built;
+}
+
+}  // namespace
+
+std::size_t builtOperations(const BuiltFunction& f) {
+  std::vector<NodeId> outputs;
+  for (const codegen::OutputBlock& b : f.definition.outputs) outputs.insert(outputs.end(), b.values.begin(), b.values.end());
+  return symbolic::coneSize(*f.graph, outputs).operations;
+}
+
+BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  const bool rnea_jacobian = spec.function == ModelFunction::Rnea &&
+                             std::any_of(spec.outputs.begin(), spec.outputs.end(),
+                                         [](const OutputSpec& o) { return o.kind == OutputKind::Jacobian; });
+  if (options.rnea_jacobian != RneaJacobianMethod::Cheaper || !rnea_jacobian) {
+    FunctionBuilderOptions one = options;
+    if (one.rnea_jacobian == RneaJacobianMethod::Cheaper) one.rnea_jacobian = RneaJacobianMethod::Differentiate;
+    return buildOneWay(model, spec, one);
+  }
+  // Both ways (tracing takes milliseconds); a graph past the node limit on one way leaves
+  // the other.
+  FunctionBuilderOptions analytic = options, differentiated = options;
+  analytic.rnea_jacobian = RneaJacobianMethod::Analytic;
+  differentiated.rnea_jacobian = RneaJacobianMethod::Differentiate;
+  std::optional<BuiltFunction> a, d;
+  try {
+    a = buildOneWay(model, spec, analytic);
+  } catch (const symbolic::GraphTooLarge&) {
+  }
+  try {
+    d = buildOneWay(model, spec, differentiated);
+  } catch (const symbolic::GraphTooLarge&) {
+    if (!a) throw;
+  }
+  if (!a) return std::move(*d);
+  if (!d) return std::move(*a);
+  const std::size_t a_ops = builtOperations(*a), d_ops = builtOperations(*d);
+  const bool analytic_kept = static_cast<double>(a_ops) <= kAnalyticRneaOperationsRatio * static_cast<double>(d_ops);
+  BuiltFunction& kept = analytic_kept ? *a : *d;
+  const BuiltFunction& other = analytic_kept ? *d : *a;
+  kept.method += "; chosen over " + std::string(analytic_kept ? "differentiation" : "the analytic derivatives") + " (" +
+                 std::to_string(analytic_kept ? a_ops : d_ops) + " operations against " +
+                 std::to_string(analytic_kept ? d_ops : a_ops) + ")";
+  kept.timings.trace_seconds += other.timings.trace_seconds;
+  kept.timings.differentiate_seconds += other.timings.differentiate_seconds;
+  kept.timings.assemble_seconds += other.timings.assemble_seconds;
+  return std::move(kept);
 }
 
 }  // namespace robodiff

@@ -34,17 +34,28 @@ enum class AbaJacobianMethod {
 };
 
 enum class RneaJacobianMethod {
-  Analytic,       // dynamics/rnea_derivatives.hpp traced (fewer operations)
+  Analytic,       // dynamics/rnea_derivatives.hpp traced, the value from the same sweep
   Differentiate,  // reverse/forward-mode differentiation of the traced RNEA
+  Cheaper,        // both built; the analytic one kept when it needs at most
+                  // kAnalyticRneaOperationsRatio of the other's operations
 };
+
+// The analytic RNEA derivatives keep more values alive across their sweeps (composite
+// inertias and B matrices): their code is faster only when it saves enough operations.
+// Measured (bench, 2 cores): the Panda's analytic Jacobian, 0.80 of the operations, ran
+// 1.20 µs against 0.85 differentiated; the Talos's, 0.74, ran 4.5-4.8 against 5.1-5.3,
+// the free-flying Talos's, 0.58, 6.7-6.9 against 10.4.
+inline constexpr double kAnalyticRneaOperationsRatio = 0.77;
 
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
   AbaJacobianMethod aba_jacobian = AbaJacobianMethod::Analytic;
-  // Measured (bench, 2 cores): the RNEA Jacobian runs faster differentiated (Panda 0.84 µs
-  // against 0.95 analytic, Talos 5.3 against 5.2), ABA's partials faster analytic (Talos
-  // ABA Jacobian 8.2 µs against 10.0; Panda 1.49 against 1.47).
-  RneaJacobianMethod rnea_jacobian = RneaJacobianMethod::Differentiate;
+  // The RNEA Jacobian: which method gives faster code depends on the robot (the UR5's
+  // aligned axes favour differentiation: 3.7k operations against 4.6k analytic; the
+  // Talos goes analytic), so both are built (tracing takes milliseconds) and compared
+  // (kAnalyticRneaOperationsRatio). ABA's partials are faster analytic (Talos ABA
+  // Jacobian 8.2 µs against 10.0; Panda 1.49 against 1.47).
+  RneaJacobianMethod rnea_jacobian = RneaJacobianMethod::Cheaper;
   RneaJacobianMethod aba_rnea_partials = RneaJacobianMethod::Analytic;  // d RNEA/d(q, v) in ABA's Jacobian
   symbolic::JacobianMode jacobian_mode = symbolic::JacobianMode::Automatic;
   // Node limit of the trace graph; beyond it the build fails with GraphTooLarge.
@@ -84,5 +95,8 @@ struct BuiltFunction {
 // size, an unknown frame, a weight count that differs from the value's size) and
 // symbolic::GraphTooLarge past options.node_limit.
 BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options = {});
+
+// Arithmetic operations the function's outputs need (what its generated code computes).
+std::size_t builtOperations(const BuiltFunction& f);
 
 }  // namespace robodiff
