@@ -66,7 +66,22 @@ typedef double rd_v __attribute__((vector_size(RD_W * sizeof(double))));
 #define RD_HELPER static inline __attribute__((unused))
 RD_HELPER rd_v rd_splat(double x) { rd_v r; RD_LANES r[l] = x; return r; }
 RD_HELPER rd_v rd_gather(const double* p, size_t stride) { rd_v r; RD_LANES r[l] = p[l * stride]; return r; }
+#if RD_W == 8 && defined(__AVX512F__)
+/* AVX-512's scatter stores the 8 lanes in one instruction, where the lane loop takes
+   about 13 (extracts and stores): outputs are most of a batched chunk's stores.
+   (Measured on the batched Talos RNEA Jacobians: 20-28% less per knot. The gather
+   instruction, tried for the inputs the same way, was slower than the lane loop.) The
+   builtin behind _mm512_i64scatter_pd, called directly: <immintrin.h> alone would add
+   about 0.1 s to each part's compilation. */
+typedef long long rd_i64x8 __attribute__((vector_size(64)));
+RD_HELPER void rd_scatter(double* p, size_t stride, rd_v x) {
+  const long long s = (long long)stride;
+  const rd_i64x8 offsets = {0, s, 2 * s, 3 * s, 4 * s, 5 * s, 6 * s, 7 * s};
+  __builtin_ia32_scatterdiv8df(p, (unsigned char)0xFF, offsets, x, 8);
+}
+#else
 RD_HELPER void rd_scatter(double* p, size_t stride, rd_v x) { RD_LANES p[l * stride] = x[l]; }
+#endif
 RD_HELPER rd_v rd_loadu(const double* p) { rd_v r; memcpy(&r, p, sizeof r); return r; }
 RD_HELPER void rd_storeu(double* p, rd_v x) { memcpy(p, &x, sizeof x); }
 #define RD_MAP1(name, f) RD_HELPER rd_v name(rd_v x) { rd_v r; RD_LANES r[l] = f(x[l]); return r; }
