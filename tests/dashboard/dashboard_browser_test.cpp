@@ -3,8 +3,9 @@
 // scripts, waiting for a DOM change, a screenshot); then the page of a real robodiffd
 // (RouDi, real build workers) while an iceoryx client loads arm7, gets a function built
 // and evaluates it: the model row, the function's phase reaching "compiled", the call
-// count and latency, a job's progress, all refreshed live without a reload and without
-// errors; a screenshot is kept in <build>/test-artifacts/dashboard.png.
+// count and latency, a failed function with its message, a job's progress, all refreshed
+// live without a reload and without errors; a screenshot is kept in
+// <build>/test-artifacts/dashboard.png.
 // Skips (naming the program) where chromium or chromedriver is not installed.
 #include <signal.h>
 
@@ -241,6 +242,28 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
       "/[\\d.]+[ ,][\\d.]+[^\\d.]+[\\d.]+[ ,][\\d.]+/.test(line.getAttribute('d') || line.getAttribute('points') || "
       "'')) || document.querySelector('svg#latency-chart').innerHTML.slice(0, 300)",
       10s));
+
+  // A function the model cannot serve: listed as failed, its message under failed builds.
+  {
+    rpc::GetFunctionRequest bad;
+    bad.model_id = model.model_id;
+    bad.spec_json = R"({"function": "fk", "frame": "no_such_frame", "outputs": [{"kind": "value"}]})";
+    bad.wait = true;
+    rpc::GetFunctionReply reply;
+    EXPECT_FALSE(client->getFunction(bad, reply).ok());
+    rpc::ListFunctionsReply list;  // an error reply carries no id: the list has it
+    ASSERT_TRUE(client->listFunctions({}, list).ok());
+    std::string failed_id;
+    for (const rpc::FunctionSummary& f : list.functions)
+      if (f.state == rpc::FunctionState::Failed && f.function_name == "fk") failed_id = f.function_id;
+    ASSERT_FALSE(failed_id.empty());
+    EXPECT_TRUE(browser.waitFor(functionRow(failed_id, "phase === 'failed'"), 10s));
+    EXPECT_TRUE(browser.waitFor(
+        "(() => { const item = document.querySelector('#build-failures li[data-function-id=\"" + failed_id +
+            "\"] .failure-message'); return item ? item.textContent.includes('no_such_frame') || item.textContent "
+            ": 'no failure listed'; })()",
+        10s));
+  }
 
   // A small trajectory job (its function is in the cache by now): its row and progress.
   {
