@@ -105,9 +105,11 @@ std::optional<JobRecord> JobIndex::find(const std::string& id) {
   return rowOf(s);
 }
 
-std::vector<JobRecord> JobIndex::list() {
+std::vector<JobRecord> JobIndex::list(std::size_t limit) {
+  // LIMIT -1 is SQLite's "no limit".
   detail::Statement s(impl_->db.handle(),
-                      (std::string("SELECT ") + kColumns + " FROM jobs ORDER BY submitted_ms DESC, id").c_str());
+                      (std::string("SELECT ") + kColumns + " FROM jobs ORDER BY submitted_ms DESC, id LIMIT ?").c_str());
+  s.bind(1, limit == 0 ? std::int64_t{-1} : static_cast<std::int64_t>(limit));
   std::vector<JobRecord> out;
   while (s.step()) out.push_back(rowOf(s));
   return out;

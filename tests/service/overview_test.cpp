@@ -2,9 +2,11 @@
 // processes: a function's phase follows its build (queued or compiling while the compiler
 // waits, then compiled, then a cache hit for the next server), its calls and batches are
 // counted and timed, failed builds are listed with the compiler's message (and stay
-// listed after the function is released), a spec failure shows as failed, and the
-// method histograms hold every request.
+// listed after the function is released), a spec failure shows as failed, the jobs are
+// the index's newest, and the method histograms hold every request.
 #include <fstream>
+
+#include "robodiff/cache/job_index.hpp"
 
 #include "service_fixtures.hpp"
 
@@ -144,6 +146,32 @@ TEST(Overview, FailedBuildsAreListedWithTheirMessagesAfterTheFunctionIsGone) {
   EXPECT_EQ(functionIn(o, f.function_id), nullptr);
   ASSERT_EQ(o.build_failures.size(), 2u);
   EXPECT_EQ(o.build_failures[1].function_id, f.function_id);
+}
+
+TEST(Overview, JobsAreTheNewestFromTheIndex) {
+  ServiceWorkspace ws;
+  auto service = ws.start(ws.options());
+  {
+    cache::JobIndex index(ws.tmp / "cache");  // the service's own index.sqlite, as another process would see it
+    for (int k = 1; k <= 4; ++k) {
+      cache::JobRecord r;
+      r.id = "job-" + std::to_string(k);
+      r.kind = "trajectory";
+      r.state = k == 4 ? "QUEUED" : "SUCCEEDED";
+      r.params_json = "{}";
+      r.owner = "elsewhere";
+      r.submitted_ms = 1000 * k;
+      index.insert(r);
+    }
+  }
+  const ServiceOverview o = service->overview(3);
+  EXPECT_TRUE(o.jobs_error.empty()) << o.jobs_error;
+  ASSERT_EQ(o.jobs.size(), 3u);
+  EXPECT_EQ(o.jobs[0].job_id, "job-4");
+  EXPECT_EQ(o.jobs[0].state, rpc::JobState::Queued);
+  EXPECT_EQ(o.jobs[2].job_id, "job-2");
+  EXPECT_EQ(o.jobs[2].state, rpc::JobState::Succeeded);
+  EXPECT_EQ(service->overview().jobs.size(), 4u);  // the default keeps 50
 }
 
 TEST(Overview, MethodHistogramsHoldEveryRequest) {

@@ -287,15 +287,22 @@ Status JobManager::status(const rpc::JobStatusRequest& request, rpc::JobStatusRe
     reply.jobs.push_back(m.infoFromRecord(*record));
     return {};
   }
-  for (const cache::JobRecord& r : m.index.list()) {
+  reply.jobs = recent(0);
+  return {};
+}
+
+std::vector<rpc::JobInfo> JobManager::recent(std::size_t limit) {
+  Impl& m = *impl_;
+  std::vector<rpc::JobInfo> jobs;
+  for (const cache::JobRecord& r : m.index.list(limit)) {
     if (const auto job = m.live(r.id)) {
       std::lock_guard lock(m.mutex);
-      reply.jobs.push_back(m.snapshot(*job));
+      jobs.push_back(m.snapshot(*job));
     } else {
-      reply.jobs.push_back(m.infoFromRecord(r));
+      jobs.push_back(m.infoFromRecord(r));
     }
   }
-  return {};
+  return jobs;
 }
 
 Status JobManager::cancel(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) {

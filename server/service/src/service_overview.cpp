@@ -112,12 +112,7 @@ ServiceOverview Service::overview(std::size_t max_jobs) const {
 
   if (s.jobs) {
     try {
-      rpc::JobStatusReply jobs;
-      if (const Status st = s.jobs->status({}, jobs); !st.ok())
-        o.jobs_error = st.message;
-      else if (jobs.jobs.size() > max_jobs)
-        jobs.jobs.resize(max_jobs);  // the index lists the newest first
-      o.jobs = std::move(jobs.jobs);
+      o.jobs = s.jobs->recent(max_jobs);
     } catch (const std::exception& e) {
       o.jobs_error = e.what();
     }

@@ -6,6 +6,7 @@
 // at complete files, and no failed, cancelled or crashed job leaves any.
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -46,7 +47,9 @@ class JobIndex {
   void finish(const std::string& id, const std::string& state, const std::string& result_json,
               const std::string& result_dir, const std::string& error, std::int64_t finished_ms);
   std::optional<JobRecord> find(const std::string& id);
-  std::vector<JobRecord> list();  // newest first
+  // Newest first; at most `limit` of them when it is not 0 (the dashboard's poll reads
+  // the newest few, not the whole history).
+  std::vector<JobRecord> list(std::size_t limit = 0);
 
   // Jobs left QUEUED or RUNNING by an owner that is gone (a server that stopped or
   // crashed): marked FAILED with `reason`, and their staging directories removed.

@@ -50,6 +50,8 @@ class JobManager {
   Status submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply);
   // An empty id lists every job in the index (this server's and earlier ones').
   Status status(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply);
+  // The newest `limit` jobs in the index (0: all), newest first; live ones as they run.
+  std::vector<rpc::JobInfo> recent(std::size_t limit);
   // Waits (up to 2 s) until a running job's worker is gone, so the reply's state is final.
   Status cancel(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply);
   // FAILED_PRECONDITION until the job has succeeded; NOT_FOUND for an unknown id.
