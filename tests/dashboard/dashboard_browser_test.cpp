@@ -44,20 +44,6 @@ std::pair<std::uint32_t, std::uint32_t> pngSize(const std::vector<std::uint8_t>&
   return {be32(16), be32(20)};
 }
 
-// The HTTP port robodiffd logged in its "http_listening" line; 0 when there is none.
-std::uint16_t httpPort(const std::string& log) {
-  std::istringstream lines(log);
-  std::string line;
-  while (std::getline(lines, line)) {
-    if (line.find("\"event\":\"http_listening\"") == std::string::npos) continue;
-    try {
-      return json::parse(line).at("port").get<std::uint16_t>();
-    } catch (const std::exception&) {
-    }
-  }
-  return 0;
-}
-
 // Skips where a program is missing; fails (with chromedriver's log) where it does not start.
 #define REQUIRE_CHROMEDRIVER(driver)                                                           \
   if (!(driver).available()) GTEST_SKIP() << (driver).unavailableReason();                     \
@@ -144,8 +130,9 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
   sharedRoudi();
   RobodiffdProcess server(dir / "cache", dir / "robodiffd.log", {"--roudi", "external", "--http", "127.0.0.1:0"});
   ASSERT_TRUE(server.running());
-  const std::uint16_t port = httpPort(server.log());
-  ASSERT_NE(port, 0) << server.log();
+  const json listening = logEvent(server.log(), "http_listening");
+  ASSERT_TRUE(listening.is_object()) << server.log();
+  const auto port = listening["port"].get<std::uint16_t>();
   auto client = connectTo("iceoryx");
 
   rpc::LoadModelRequest load;

@@ -21,20 +21,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The first log line of `event`, parsed; null when there is none yet.
-nlohmann::json logEvent(const std::string& log, const std::string& event) {
-  std::istringstream lines(log);
-  std::string line;
-  while (std::getline(lines, line)) {
-    if (line.find("\"event\":\"" + event + "\"") == std::string::npos) continue;
-    try {
-      return nlohmann::json::parse(line);
-    } catch (const std::exception&) {
-    }
-  }
-  return nullptr;
-}
-
 // Polls `path` until its status is `status` (or `timeout` passes); the last reply.
 HttpReply waitForStatus(std::uint16_t port, const std::string& path, int status, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;

@@ -12,11 +12,13 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "support/test_paths.hpp"
 
@@ -36,6 +38,21 @@ inline int testDomain() {
 inline void useLoopbackDds() {
   const std::string uri = "file://" + (sourceDir() / "deploy/cyclonedds-loopback.xml").string();
   setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+}
+
+// The first JSON log line of `event` in `log` (robodiffd --log-format json), parsed;
+// null when there is none yet.
+inline nlohmann::json logEvent(const std::string& log, const std::string& event) {
+  std::istringstream lines(log);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.find("\"event\":\"" + event + "\"") == std::string::npos) continue;
+    try {
+      return nlohmann::json::parse(line);
+    } catch (const std::exception&) {
+    }
+  }
+  return nullptr;
 }
 
 class RobodiffdProcess {
