@@ -41,11 +41,11 @@ enum class RneaJacobianMethod {
 };
 
 // The analytic RNEA derivatives keep more values alive across their sweeps (composite
-// inertias and B matrices): their code is faster only when it saves enough operations.
-// Measured (bench, 2 cores): the Panda's analytic Jacobian, 0.80 of the operations, ran
-// 1.20 µs against 0.85 differentiated; the Talos's, 0.74, ran 4.5-4.8 against 5.1-5.3,
-// the free-flying Talos's, 0.58, 6.7-6.9 against 10.4.
-inline constexpr double kAnalyticRneaOperationsRatio = 0.77;
+// inertias and Coriolis composites): their code is faster only when it saves enough
+// operations. Measured (codegen 0.3.0, 2 cores, one run each way): the Panda's analytic
+// Jacobian, 0.77 of the operations, ran 0.95 µs against 0.85 differentiated; the
+// Talos's, 0.71, 4.2 against 4.85; the free-flying Talos's, 0.56, 5.9 against 11.0-11.5.
+inline constexpr double kAnalyticRneaOperationsRatio = 0.74;
 
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
