@@ -54,8 +54,8 @@ TEST(CEmitter, SinAndCosOfOneArgumentComeFromOneSincos) {
   FunctionDefinition f{"rot", {{"q", 2}}, {OutputBlock::dense("R", 2, 2, {c, g.unary(Op::Neg, s), s, other})}};
   auto lib = generateLibrary(g, {f});
   const std::string body = scalarBody(lib, "rot");
-  EXPECT_EQ(countOf(body, "sincos("), 1u) << body;
-  EXPECT_EQ(countOf(body, "cos("), 1u) << body;  // the one in sincos(
+  EXPECT_EQ(countOf(body, "rd_sincos1("), 1u) << body;  // the inline kernel (sincos_kernel.h)
+  EXPECT_EQ(countOf(body, "cos("), 0u) << body;
   EXPECT_EQ(countOf(body, " sin("), 1u) << body;
   EXPECT_EQ(lib.functions.at(0).sincos_pairs, 1u);
   EXPECT_NE(mainSource(lib).find("rd_sincos("), std::string::npos);  // the batched variant too
@@ -158,9 +158,12 @@ TEST(CEmitter, DescribesItselfInTheSource) {
   EXPECT_NE(s.find("robodiff_library ="), std::string::npos);
   EXPECT_NE(s.find("ROBODIFF_OUTPUT_SPARSE"), std::string::npos);
   EXPECT_NE(s.find(kGeneratorVersion), std::string::npos);
-  ASSERT_EQ(lib.headers.size(), 1u);
+  EXPECT_NE(s.find("#include \"robodiff/codegen/sincos_kernel.h\""), std::string::npos);
+  ASSERT_EQ(lib.headers.size(), 2u);
   EXPECT_EQ(lib.headers[0].path, "robodiff/codegen/abi.h");
   EXPECT_NE(lib.headers[0].text.find("ROBODIFF_ABI_VERSION"), std::string::npos);
+  EXPECT_EQ(lib.headers[1].path, "robodiff/codegen/sincos_kernel.h");
+  EXPECT_NE(lib.headers[1].text.find("rd_sincos1"), std::string::npos);
 }
 
 TEST(CEmitter, RejectsBadDefinitions) {

@@ -36,7 +36,8 @@ std::string prologue(const CodegenOptions& options) {
     << "#define _GNU_SOURCE /* sincos */\n"
        "#include <math.h>\n"
        "#include <string.h>\n"
-       "#include \"robodiff/codegen/abi.h\"\n\n"
+       "#include \"robodiff/codegen/abi.h\"\n"
+       "#include \"robodiff/codegen/sincos_kernel.h\"\n\n"
        "#if defined(__GNUC__) && !defined(__TINYC__)\n"
        "#define RD_HIDDEN __attribute__((visibility(\"hidden\")))\n"
        "#define RD_EXPORT __attribute__((visibility(\"default\")))\n"
@@ -63,7 +64,8 @@ std::string prologue(const CodegenOptions& options) {
   }
   // Lane-wise helpers: arithmetic is native vector arithmetic; library functions and
   // the transposition between knots and lanes go lane by lane (exactly what the
-  // scalar code computes; the compiler vectorises what it can).
+  // scalar code computes; the compiler vectorises what it can), except sin and cos of
+  // one argument, which run sincos_kernel.h in every lane at once.
   s << R"(
 #if RD_VECTOR
 typedef double rd_v __attribute__((vector_size(RD_W * sizeof(double))));
@@ -95,8 +97,28 @@ RD_MAP1(rd_sin, sin) RD_MAP1(rd_cos, cos) RD_MAP1(rd_tan, tan) RD_MAP1(rd_asin, 
 RD_MAP1(rd_acos, acos) RD_MAP1(rd_atan, atan) RD_MAP1(rd_exp, exp) RD_MAP1(rd_log, log)
 RD_MAP1(rd_sqrt, sqrt) RD_MAP1(rd_tanh, tanh) RD_MAP1(rd_fabs, fabs)
 RD_MAP2(rd_atan2, atan2) RD_MAP2(rd_pow, pow) RD_MAP2(rd_fmin, fmin) RD_MAP2(rd_fmax, fmax)
+/* sincos_kernel.h's operations in every lane (libm's sincos lane by lane when a lane
+   is beyond the kernel's range). */
+typedef unsigned long long rd_u __attribute__((vector_size(RD_W * sizeof(double))));
 RD_HELPER void rd_sincos(rd_v x, rd_v* s, rd_v* c) {
-  RD_LANES { double a, b; sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; }
+  const rd_u ax = (rd_u)x & ~RD_SC_SIGN_BIT;
+  unsigned long long beyond = 0;
+  RD_LANES beyond |= ax[l] > RD_SC_LIMIT_BITS;
+  if (beyond) {
+    RD_LANES { double a, b; sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; }
+    return;
+  }
+#define RD_SC_TYPE rd_v
+#define RD_SC_BITS rd_u
+  rd_v t, r, z, sp, cp;
+  RD_SC_REDUCE(x, t, r, z);
+  RD_SC_POLY(r, z, sp, cp);
+  rd_u q = (rd_u)t, si = (rd_u)sp, ci = (rd_u)cp;
+  RD_SC_QUADRANT(q, si, ci);
+  *s = (rd_v)si;
+  *c = (rd_v)ci;
+#undef RD_SC_TYPE
+#undef RD_SC_BITS
 }
 RD_HELPER rd_v rd_select(rd_v c, rd_v a, rd_v b) { rd_v r; RD_LANES r[l] = c[l] > 0.0 ? a[l] : b[l]; return r; }
 #endif
@@ -274,7 +296,7 @@ class ChunkPrinter {
           declared_[slot] = 1;
           out_ << "  " << type() << " t" << slot << ";\n";
         }
-        out_ << "  " << (vector() ? "rd_sincos(" : "sincos(") << operand(ins.args[0]) << ", &t" << ins.dst << ", &t"
+        out_ << "  " << (vector() ? "rd_sincos(" : "rd_sincos1(") << operand(ins.args[0]) << ", &t" << ins.dst << ", &t"
              << ins.dst2 << ");\n";
         break;
       case InstrKind::StoreOutput:
@@ -436,6 +458,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
   const std::string head = prologue(options);
   GeneratedLibrary lib;
   lib.headers.push_back({"robodiff/codegen/abi.h", abiHeaderText()});
+  lib.headers.push_back({"robodiff/codegen/sincos_kernel.h", sincosKernelText()});
   std::ostringstream main;
   main << head;
   std::ostringstream table;

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "lowering.hpp"
+#include "robodiff/codegen/sincos_kernel.h"
 
 namespace robodiff::codegen {
 namespace {
@@ -411,7 +412,7 @@ void Interpreter::evaluateBatch(std::uint64_t n, const double* const* in, double
   OP(Neg, 2, v[e[0]] = -v[e[1]])                                             \
   OP(Sin, 2, v[e[0]] = std::sin(v[e[1]]))                                    \
   OP(Cos, 2, v[e[0]] = std::cos(v[e[1]]))                                    \
-  OP(SinCos, 3, ::sincos(v[e[2]], &v[e[0]], &v[e[1]]))                       \
+  OP(SinCos, 3, rd_sincos1(v[e[2]], &v[e[0]], &v[e[1]]))  /* as generated code */ \
   OP(Tan, 2, v[e[0]] = std::tan(v[e[1]]))                                    \
   OP(Asin, 2, v[e[0]] = std::asin(v[e[1]]))                                  \
   OP(Acos, 2, v[e[0]] = std::acos(v[e[1]]))                                  \

@@ -152,11 +152,13 @@ class Lowerer {
       if (n.op == Op::Sin) sin_of[n.args[0]] = id;
       if (n.op == Op::Cos) cos_of[n.args[0]] = id;
     }
-    // Transcendental functions of inputs (sin/cos of joint angles) come first: each is a
-    // library call (W calls in the SIMD variant) that clobbers every register, so values
+    // Transcendental functions of inputs (sin/cos of joint angles) come first: most are
+    // library calls (W calls in the SIMD variant) that clobber every register, so values
     // live across them are spilled; computed before anything else, only their own
     // results are live. Measured: a Talos part whose 61 sincos calls were interleaved
     // with the kinematics took gcc 48 s and 820 MB to compile, 1.5 s once hoisted.
+    // (sin and cos of one argument are now an inline kernel, which keeps its fallback
+    // call for huge arguments: hoisted too.)
     std::vector<NodeId> order;
     order.reserve(needed_count_);
     for (NodeId id = 0; id < n_; ++id)

@@ -18,7 +18,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.2.0";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.0";
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
@@ -64,6 +64,8 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
 
 // The text of robodiff/codegen/abi.h this generator was built with (the sources include it).
 const std::string& abiHeaderText();
+// The sin-and-cos kernel generated code and the interpreter share (sincos_kernel.h).
+const std::string& sincosKernelText();
 
 // `value` as a C double literal that reads back exactly (e.g. "0.1", "2.0", "-1e-300",
 // "INFINITY").
