@@ -166,6 +166,21 @@ TEST(CEmitter, DescribesItselfInTheSource) {
   EXPECT_NE(lib.headers[1].text.find("rd_sincos1"), std::string::npos);
 }
 
+// The batched chunk clears large output blocks before scattering into them (the
+// memset claims their cache lines); the single-knot code and small blocks do not.
+TEST(CEmitter, TheBatchedChunkClaimsLargeOutputBlocks) {
+  Graph g;
+  FunctionDefinition f = triangularFunction(g, "tri", 24);  // J: 300 values, g: 24
+  const GeneratedLibrary lib = generateLibrary(g, {f});
+  const std::string& s = mainSource(lib);
+  const std::size_t chunk = s.find("static void rd_tri_chunk(");
+  ASSERT_NE(chunk, std::string::npos);
+  const std::string vector_body = s.substr(chunk, s.find("\n}\n", chunk) - chunk);
+  EXPECT_EQ(countOf(vector_body, "memset(o0, 0, RD_W * 300 * sizeof(double)); /* claim the lines */"), 1u) << vector_body;
+  EXPECT_EQ(countOf(vector_body, "memset(o1"), 0u);
+  EXPECT_EQ(countOf(scalarBody(lib, "tri"), "memset"), 0u);
+}
+
 TEST(CEmitter, RejectsBadDefinitions) {
   Graph g;
   NodeId x = g.input(0);

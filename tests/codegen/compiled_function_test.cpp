@@ -28,6 +28,8 @@ struct Functions {
       definitions.push_back(randomFunction(graph, "random" + std::to_string(seed), seed, 250));
     definitions.push_back(chainFunction(graph, "fk", 7));
     definitions.push_back(triangularFunction(graph, "tri", 6));
+    // 300 sparse values: a block the batched chunk claims with a memset first.
+    definitions.push_back(triangularFunction(graph, "tri_large", 24));
   }
 };
 

@@ -168,26 +168,45 @@ std::string cString(const std::string& s) {
 // Prints one chunk of a lowered function as the body of a C function.
 class ChunkPrinter {
  public:
+  // Output blocks of at least this many values are claimed by the batched chunk.
+  static constexpr std::uint32_t kClaimMinimum = 256;
+
   ChunkPrinter(const FunctionDefinition& f, Flavour flavour) : f_(f), flavour_(flavour) {}
 
   // `signature` is the function's declaration up to, not including, the body.
-  std::string print(const std::string& signature, const Chunk& chunk) {
+  // `first`: the function's first chunk, where the batched flavour claims its outputs.
+  std::string print(const std::string& signature, const Chunk& chunk, bool first = false) {
     out_.str("");
     declared_.assign(chunk.slots, 0);
-    std::set<std::uint32_t> in_blocks, out_blocks;
+    std::set<std::uint32_t> in_blocks, out_blocks, zeroed, claimed;
     bool uses_work = false;
     for (const Instr& ins : chunk.code) {
       if (ins.kind == InstrKind::LoadInput) in_blocks.insert(ins.block);
       if (ins.kind == InstrKind::StoreOutput || ins.kind == InstrKind::ZeroOutput) out_blocks.insert(ins.block);
+      if (ins.kind == InstrKind::ZeroOutput) zeroed.insert(ins.block);
       if (ins.args[0].kind == Operand::Kind::Input) in_blocks.insert(ins.args[0].block);
       if (ins.kind == InstrKind::LoadTransfer || ins.kind == InstrKind::StoreTransfer) uses_work = true;
     }
+    if (vector() && first)
+      for (std::uint32_t b = 0; b < f_.outputs.size(); ++b)
+        if (!zeroed.count(b) && f_.outputs[b].size() >= kClaimMinimum) {
+          claimed.insert(b);
+          out_blocks.insert(b);
+        }
     out_ << signature << " {\n";
     for (std::uint32_t b : in_blocks) out_ << "  const double* restrict i" << b << " = in[" << b << "];\n";
     for (std::uint32_t b : out_blocks) out_ << "  double* restrict o" << b << " = out[" << b << "];\n";
     if (in_blocks.empty()) out_ << "  (void)in;\n";
     if (out_blocks.empty()) out_ << "  (void)out;\n";
     if (!uses_work) out_ << "  (void)w;\n";
+    // The batched chunk scatters each output value to RD_W knots' arrays, and a scatter
+    // to a line not in cache waits for the line to be read first. memset claims a block's
+    // lines in bulk (the string store writes whole lines, read from nowhere), so the
+    // scatters that follow hit cache. Measured on the free-flying Talos's sparse RNEA
+    // Jacobian, 1,986 values a knot: 2.7-3.5 us a knot in a batch of 1,000 without,
+    // 1.9-2.1 with. Blocks with structural zeros are cleared anyway (ZeroOutput).
+    for (std::uint32_t b : claimed)
+      out_ << "  memset(o" << b << ", 0, RD_W * " << f_.outputs[b].size() << " * sizeof(double)); /* claim the lines */\n";
     for (const Instr& ins : chunk.code) printInstr(ins);
     out_ << "}\n";
     return out_.str();
@@ -308,8 +327,8 @@ class ChunkPrinter {
         break;
       case InstrKind::ZeroOutput: {
         const std::uint32_t size = f_.outputs[ins.block].size();
-        if (vector())
-          out_ << "  RD_LANES memset(o" << ins.block << " + l * " << size << ", 0, " << size << " * sizeof(double));\n";
+        if (vector())  // the chunk's RD_W knots are consecutive
+          out_ << "  memset(o" << ins.block << ", 0, RD_W * " << size << " * sizeof(double));\n";
         else
           out_ << "  memset(o" << ins.block << ", 0, " << size << " * sizeof(double));\n";
         break;
@@ -487,7 +506,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     if (parts == 1) {
       main << scalar.print("static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n"
            << "#if RD_VECTOR\n"
-           << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0])
+           << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
            << "#endif\n\n";
     } else {
       for (std::uint32_t p = 0; p < parts; ++p) {
@@ -496,7 +515,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
         file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
              << scalar.print("RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, lowered.chunks[p]) << "\n"
              << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
-             << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p]) << "#endif\n";
+             << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p], p == 0) << "#endif\n";
         lib.sources.push_back({f.name + "_part" + std::to_string(p) + ".c", file.str()});
         main << "RD_HIDDEN void " << part << kEvalParams << ";\n"
              << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n#endif\n";
