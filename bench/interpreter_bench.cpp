@@ -59,9 +59,9 @@ int main(int argc, char** argv) {
       const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n;
       best = std::min(best, t);
     }
-    std::printf("%-22s %7zu instructions  %6zu groups  work %6zu  best %.3f us  (%.2f ns/instr)\n", s[0],
-                interp.instructionCount(), interp.groupCount(), interp.workSize(), best * 1e6,
-                best * 1e9 / interp.instructionCount());
+    std::printf("%-22s %7zu instructions (%zu after fusion)  %6zu groups  work %6zu  best %.3f us  (%.2f ns/instr)\n",
+                s[0], interp.instructionCount(), interp.executedCount(), interp.groupCount(), interp.workSize(),
+                best * 1e6, best * 1e9 / interp.executedCount());
     if (histogram) {
       const auto& code = interp.code();
       std::map<int, int> ops;

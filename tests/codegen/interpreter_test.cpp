@@ -72,6 +72,28 @@ TEST(Interpreter, IsCompact) {
   EXPECT_LE(interpreter.workSize(), 300u + 3u + 2u);  // constants, scratch, two locals
 }
 
+// Products and sums read once are fused into their reader ((a*b)*c, (a+b)-c, ...): fewer
+// instructions run, and the results stay bit for bit those of the unfused operations.
+TEST(Interpreter, FusesProductsAndSumsReadOnce) {
+  Graph g;
+  const NodeId a = g.input(0), b = g.input(1), c = g.input(2), d = g.input(3);
+  const NodeId ab = g.binary(Op::Mul, a, b), cd = g.binary(Op::Add, c, d);
+  const NodeId y0 = g.binary(Op::Mul, ab, c);                      // (a*b)*c
+  const NodeId y1 = g.binary(Op::Sub, d, cd);                      // d - (c+d)
+  const NodeId y2 = g.binary(Op::Sub, g.binary(Op::Add, a, d), b);  // (a+d) - b
+  const NodeId y3 = g.binary(Op::Add, g.binary(Op::Add, b, c), a);  // (b+c) + a
+  FunctionDefinition f{"fused", {{"x", 4}}, {OutputBlock::dense("y", 4, 1, {y0, y1, y2, y3})}};
+  const Interpreter interpreter(g, f);
+  EXPECT_EQ(interpreter.executedCount() + 4, interpreter.instructionCount());  // four fused producers
+  std::vector<double> work(interpreter.workSize());
+  const auto in = randomInputs(f, 1, 3);
+  auto out = outputBuffers(f, 1);
+  interpreter.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
+  const double* x = in[0].data();
+  const double expected[4] = {x[0] * x[1] * x[2], x[3] - (x[2] + x[3]), x[0] + x[3] - x[1], x[1] + x[2] + x[0]};
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(out[0][i], expected[i]) << i;
+}
+
 // Many independent columns (as in a Jacobian): the scheduler groups instructions of one
 // opcode, so a dispatch runs many of them, and the results stay those of Graph::evaluate.
 // The output block is mostly structural zeros (cleared at once) and starts out as NaN.

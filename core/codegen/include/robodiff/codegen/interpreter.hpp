@@ -38,6 +38,7 @@ class Interpreter {
     Sin, Cos, SinCos, Tan, Asin, Acos, Atan, Exp, Log, Sqrt, Tanh, Abs,
     Add, Sub, Mul, Div, Atan2, Pow, Min, Max, Select,
     MulAdd, MulSub, SubMul,  // a*b + c, a*b - c, c - a*b (rounded twice, as unfused)
+    MulMul, AddAdd, AddSub, SubAdd,  // (a*b)*c, (a+b)+c, (a+b)-c, c-(a+b)
     End,                     // the last instruction
   };
   // Load: v[dst] = in[a][b]; Store(Neg): out[a][b] = (-)v[c]; Zero: out[a][..] = 0; SinCos: v[dst] = sin(v[a]),
@@ -50,10 +51,15 @@ class Interpreter {
   const std::vector<Instruction>& code() const { return code_; }
   // Dispatches per evaluation: runs of one opcode after scheduling (End not counted).
   std::size_t groupCount() const { return groups_; }
+  // Instructions per evaluation after fusing single-use products and sums (End not counted).
+  std::size_t executedCount() const { return executed_; }
   static const char* name(Code code);  // "MulAdd"
 
  private:
   void run(std::uint64_t knot, const double* const* in, double* const* out, double* v) const;
+  template <class Field>
+  void runStream(const Field* stream, std::uint64_t knot, const double* const* in, double* const* out,
+                 double* v) const;
 
   FunctionDefinition function_;
   std::vector<std::uint32_t> input_sizes_, output_sizes_;
@@ -61,8 +67,11 @@ class Interpreter {
   std::vector<Instruction> code_;
   // What run() executes: groups [code, n, n entries of operandsOf(code) slot numbers]
   // ..., then End. Each group is one dispatch and a tight loop over its entries.
+  // Held in stream16_ instead when every number in it fits in 16 bits.
   std::vector<std::uint32_t> stream_;
+  std::vector<std::uint16_t> stream16_;
   std::size_t groups_ = 0;
+  std::size_t executed_ = 0;
   std::size_t work_size_ = 0;
 };
 
