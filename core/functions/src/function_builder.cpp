@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 
+#include "robodiff/dynamics/minv.hpp"
 #include "robodiff/dynamics/rnea_derivatives.hpp"
 #include "robodiff/functions/model_function.hpp"
 #include "robodiff/symbolic/cone.hpp"
@@ -64,6 +65,33 @@ std::vector<NodeId> sideBySide(const std::map<std::string, std::vector<NodeId>>&
       for (std::size_t c = 0; c < static_cast<std::size_t>(n); ++c)
         out[r * cols + b * n + c] = blocks.at(wrt[b])[r * n + c];
   return out;
+}
+
+// -M^-1 B for an n x n row-major block B, from the factors of M = L^T D L (LD as
+// factorizeMassMatrix leaves them, row-major; dynamics/minv.hpp), column by column:
+// L^T y = b, z = D^-1 y, L x = z. L is nonzero only along ancestor chains, and a column
+// of an RNEA partial only on its joint's branch, so most products are with structural
+// zeros and fold away as they are built. Against the dense product M^-1 B (which the
+// builder used before): free-flying Talos ABA + Jacobian 181,520 -> 153,680 operations
+// (36.5-37.1 -> 33.1 µs); fixed Talos 63,615 -> 59,419.
+std::vector<NodeId> solveWithMassFactors(Graph& graph, const Model& model, const std::vector<NodeId>& LD,
+                                         const std::vector<NodeId>& B, int n) {
+  const std::vector<int> lambda = dofParents(model);
+  auto at = [&](const std::vector<NodeId>& m, int r, int c) { return Sym(graph, m[static_cast<std::size_t>(r) * n + c]); };
+  std::vector<Sym> inverse_diagonal;
+  for (int i = 0; i < n; ++i) inverse_diagonal.push_back(Sym(1.0) / at(LD, i, i));
+  std::vector<NodeId> X(static_cast<std::size_t>(n) * n);
+  std::vector<Sym> x(static_cast<std::size_t>(n));
+  for (int c = 0; c < n; ++c) {
+    for (int i = 0; i < n; ++i) x[i] = -at(B, i, c);
+    for (int i = n - 1; i >= 0; --i)  // L^T y = -b
+      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[j] = x[j] - at(LD, i, j) * x[i];
+    for (int i = 0; i < n; ++i) x[i] = x[i] * inverse_diagonal[i];
+    for (int i = 0; i < n; ++i)  // L x = z
+      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[i] = x[i] - at(LD, i, j) * x[j];
+    for (int r = 0; r < n; ++r) X[static_cast<std::size_t>(r) * n + c] = x[r].nodeIn(graph);
+  }
+  return X;
 }
 
 // The working trace: the model function on symbolic inputs, in a graph that may also
@@ -210,9 +238,11 @@ BuiltFunction buildOneWay(const Model& model, const FunctionSpec& spec, const Fu
   } else if (spec.function == ModelFunction::Rnea && rnea_analytic && any_jacobian) {
     analyticPartials(trace->inputs[2]);
   }
+  std::vector<NodeId> mass_factors;  // L^T D L of M (lower triangle), n x n row-major
   if (aba_analytic) {
     Data<Sym> d3(model);
     minv = tracer.outputs(computeMinverse(model, d3, q_plain));
+    mass_factors = tracer.outputs(d3.M);
   }
   const bool rnea_from_partials = spec.function == ModelFunction::Rnea && !rnea_partials.empty();
   std::vector<symbolic::Hessian> hessians(spec.outputs.size());
@@ -259,20 +289,13 @@ BuiltFunction buildOneWay(const Model& model, const FunctionSpec& spec, const Fu
     if (a_star_used)
       for (int i = 0; i < n; ++i) input_map[a_star_first + i] = value[i];
     const std::vector<NodeId> Minv_nodes = symbolic::copyCone(g, minv, out, input_map);
-    auto Minv = [&](int r, int c) { return Sym(out, Minv_nodes[static_cast<std::size_t>(r) * n + c]); };
+    const std::vector<NodeId> LD = symbolic::copyCone(g, mass_factors, out, input_map);
     std::map<std::string, std::vector<NodeId>> blocks;  // n x n row-major, final graph
     blocks["tau"] = Minv_nodes;
     for (const auto& [w, partial] : rnea_partials) {
       if (w == "a") continue;
       const std::vector<NodeId> D = symbolic::copyCone(g, partial, out, input_map);
-      std::vector<NodeId> block(static_cast<std::size_t>(n) * n);
-      for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) {
-          Sym s(0.0);
-          for (int k = 0; k < n; ++k) s = s - Minv(r, k) * Sym(out, D[static_cast<std::size_t>(k) * n + c]);
-          block[static_cast<std::size_t>(r) * n + c] = s.nodeIn(out);
-        }
-      blocks[w] = std::move(block);
+      blocks[w] = solveWithMassFactors(out, model, LD, D, n);
     }
     for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
       const OutputSpec& o = spec.outputs[k];
