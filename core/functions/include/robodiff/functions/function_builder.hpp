@@ -42,10 +42,11 @@ enum class RneaJacobianMethod {
 
 // The analytic RNEA derivatives keep more values alive across their sweeps (composite
 // inertias and Coriolis composites): their code is faster only when it saves enough
-// operations. Measured (codegen 0.3.0, 2 cores, one run each way): the Panda's analytic
-// Jacobian, 0.77 of the operations, ran 0.95 µs against 0.85 differentiated; the
-// Talos's, 0.71, 4.2 against 4.85; the free-flying Talos's, 0.56, 5.9 against 11.0-11.5.
-inline constexpr double kAnalyticRneaOperationsRatio = 0.74;
+// operations. Measured as medians over copies of each library (codegen 0.3.0, 2 cores;
+// identical copies differ by up to 2x with where their pages land, so one copy decides
+// nothing): the Panda's analytic Jacobian, 0.77 of the operations, 0.745 µs against 0.846
+// differentiated; the Talos's, 0.71, 4.0 against 5.08; the UR5's, 1.17, 0.54 against 0.29.
+inline constexpr double kAnalyticRneaOperationsRatio = 0.80;
 
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
