@@ -50,8 +50,7 @@ template <class S> struct CoriolisComposite {
   CoriolisComposite& operator+=(const CoriolisComposite& o) {
     t += o.t;
     sbr += o.sbr;
-    mu.linear += o.mu.linear;
-    mu.angular += o.mu.angular;
+    mu += o.mu;
     return *this;
   }
   // B x = [(t - mu_l) x x_a; -(t + mu_l) x x_l + Sbr x_a - mu_a x x_a]
