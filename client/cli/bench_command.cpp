@@ -182,10 +182,10 @@ struct Generated {
   GeneratedFunctionLibrary lib;
   double total_seconds = 0;
   std::uint64_t process_peak_bytes = 0;
-  std::optional<codegen::CompiledFunction> fn;
-  // The same library loaded from `copies` files (fn's first): identical bytes on other
-  // pages, because where a library's pages land moves its speed by up to 2x.
+  // The library loaded from `copies` files (the built one first): identical bytes on
+  // other pages, because where a library's pages land moves its speed by up to 2x.
   std::vector<codegen::CompiledFunction> copies;
+  const codegen::CompiledFunction& fn() const { return copies.front(); }
 };
 
 // Median of `copies` timings, one per copy of the library (`time` returns seconds).
@@ -368,8 +368,7 @@ void run(const Options& o) {
     std::snprintf(line, sizeof line, "  %.3f s (compile %.3f s), %u operations", g.total_seconds, g.lib.compile.seconds,
                   g.lib.info.operations);
     progress(line);
-    g.fn = codegen::LoadedLibrary::open(g.lib.library).function(s.name);
-    g.copies.push_back(*g.fn);
+    g.copies.push_back(codegen::LoadedLibrary::open(g.lib.library).function(s.name));
     for (int c = 1; c < o.copies; ++c) {
       const fs::path copy = dir.path() / (std::string(s.name) + "_copy" + std::to_string(c) + ".so");
       fs::copy_file(g.lib.library, copy, fs::copy_options::overwrite_existing);
@@ -426,7 +425,7 @@ void run(const Options& o) {
   std::map<std::string, Buffers> single;
   for (Generated& g : gens) {
     timeRow("generated " + g.name);
-    Buffers& b = single.emplace(g.name, Buffers(model, g, 1, g.fn->workSize())).first->second;
+    Buffers& b = single.emplace(g.name, Buffers(model, g, 1, g.fn().workSize())).first->second;
     const double t = 1e6 * medianOverCopies(g, [&](const codegen::CompiledFunction& f) {
                        return secondsPerCall(
                            [&] {
@@ -435,7 +434,7 @@ void run(const Options& o) {
                            },
                            plan);
                      });
-    g.fn->evaluate(b.in_ptr.data(), b.out_ptr.data(), b.work.data());  // the outputs the checks read
+    g.fn().evaluate(b.in_ptr.data(), b.out_ptr.data(), b.work.data());  // the outputs the checks read
     Row r = makeRow(g.name, "generated " + g.label, "generated " + g.label, Unit::Microseconds, t);
     if (g.name == "rnea_jacobian_dense") r.short_label = "generated RNEA J";
     if (g.name == "aba_jacobian") r.short_label = "generated ABA J";
@@ -488,7 +487,7 @@ void run(const Options& o) {
   // Batches of 1,000 knots: one call of evaluateBatch on one thread; a slice per thread.
   for (Generated* g : {&rnea_j, &aba_j}) {
     timeRow("batch of " + std::to_string(kKnots) + " knots, " + g->name);
-    const codegen::CompiledFunction& f = *g->fn;
+    const codegen::CompiledFunction& f = g->fn();
     Buffers b(model, *g, kKnots, f.batchWorkSize());
     const double per_batch = medianOverCopies(*g, [&](const codegen::CompiledFunction& copy) {
       return secondsPerCall(
@@ -523,7 +522,7 @@ void run(const Options& o) {
 
     // The batch computes what single calls compute.
     double err = 0;
-    const codegen::CompiledFunction& single_f = *g->fn;
+    const codegen::CompiledFunction& single_f = g->fn();
     Buffers one(model, *g, 1, single_f.workSize());
     for (std::uint64_t k = 0; k < kKnots; k += 97) {
       for (std::size_t blk = 0; blk < one.in.size(); ++blk) {
