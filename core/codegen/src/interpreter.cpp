@@ -46,32 +46,9 @@ Code codeOf(Op op) {
   throw std::logic_error("interpreter: not an operation");
 }
 
-// For each instruction and operand: whether it is the last read of that slot's value.
-std::vector<std::array<bool, 3>> lastReads(const std::vector<detail::Instr>& code, std::uint32_t slots) {
-  std::vector<std::array<bool, 3>> last(code.size(), {false, false, false});
-  std::vector<char> live(slots, 0);
-  for (std::size_t k = code.size(); k-- > 0;) {
-    const detail::Instr& ins = code[k];
-    const bool defines = ins.kind == InstrKind::LoadInput || ins.kind == InstrKind::LoadTransfer ||
-                         ins.kind == InstrKind::Compute || ins.kind == InstrKind::SinCos;
-    if (defines) live[ins.dst] = 0;
-    if (ins.kind == InstrKind::SinCos) live[ins.dst2] = 0;
-    for (int a = 0; a < 3; ++a) {
-      const Operand& o = ins.args[a];
-      if (o.kind != Operand::Kind::Slot) continue;
-      const bool reads = ins.kind == InstrKind::Compute ? a < symbolic::arity(ins.op) : a == 0;
-      if (!reads || ins.kind == InstrKind::LoadInput || ins.kind == InstrKind::LoadTransfer) continue;
-      if (!live[o.slot]) last[k][a] = true;
-      live[o.slot] = 1;
-    }
-  }
-  return last;
-}
-
 // Slots: [constants | 3 scratch | the lowered function's locals]. Negated operands fold
-// into add/sub (a + -b -> a - b) or, rarely, go through a scratch slot. A product read
-// only by the add or subtract right after it fuses with it (two roundings kept: this is
-// not an FMA), saving one dispatch.
+// into add/sub (a + -b -> a - b) or, rarely, go through a scratch slot. (Products and
+// sums are fused into their readers later, in SSA form: fuseSingleUse.)
 class Assembler {
  public:
   explicit Assembler(std::vector<Interpreter::Instruction>& code, std::vector<double>& constants,
@@ -81,40 +58,7 @@ class Assembler {
   static constexpr std::uint32_t kScratch = 3;
 
   void assemble(const detail::Chunk& chunk) {
-    const auto last = lastReads(chunk.code, chunk.slots);
-    for (std::size_t k = 0; k < chunk.code.size(); ++k) {
-      if (k + 1 < chunk.code.size() && fuse(chunk.code[k], chunk.code[k + 1], last[k + 1])) {
-        ++k;
-        continue;
-      }
-      lowered(chunk.code[k]);
-    }
-  }
-
- private:
-  static bool plainOperand(const Operand& o) { return o.kind != Operand::Kind::Slot || !o.negated; }
-
-  // mul then add/sub of its product: one MulAdd, MulSub or SubMul.
-  bool fuse(const detail::Instr& mul, const detail::Instr& next, const std::array<bool, 3>& next_last) {
-    if (mul.kind != InstrKind::Compute || mul.op != Op::Mul || next.kind != InstrKind::Compute) return false;
-    if (next.op != Op::Add && next.op != Op::Sub) return false;
-    if (!plainOperand(mul.args[0]) || !plainOperand(mul.args[1])) return false;
-    auto isProduct = [&](int a) {
-      const Operand& o = next.args[a];
-      return o.kind == Operand::Kind::Slot && o.slot == mul.dst && !o.negated && next_last[a];
-    };
-    const bool p0 = isProduct(0), p1 = isProduct(1);
-    if (p0 == p1) return false;  // neither, or the product twice
-    const Operand& other = next.args[p0 ? 1 : 0];
-    if (other.kind == Operand::Kind::Slot && other.slot == mul.dst) return false;
-    const bool negated = other.kind == Operand::Kind::Slot && other.negated;
-    Code code;
-    if (next.op == Op::Add) code = negated ? Code::MulSub : Code::MulAdd;  // p + c, p + -c
-    else if (p0) code = negated ? Code::MulAdd : Code::MulSub;            // p - c, p - -c
-    else if (!negated) code = Code::SubMul;                               // c - p
-    else return false;                                                    // -c - p: rare
-    emit(code, local(next.dst), slotOf(mul.args[0]), slotOf(mul.args[1]), slotOf(other));
-    return true;
+    for (const detail::Instr& ins : chunk.code) lowered(ins);
   }
 
  public:
@@ -344,7 +288,7 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
   // adds it becomes part of that reader (MulMul (a*b)*c, MulAdd, MulSub, SubMul, AddAdd
   // (a+b)+c, AddSub (a+b)-c, SubAdd c-(a+b)). The same operations in the same order,
   // rounded after each, so results stay bit for bit; one dispatch and one stored value
-  // less each. (The assembler fuses only a product with the add right after it.)
+  // less each.
   fuseSingleUse(nodes, nconst, values);
 
   // 2. Greedy list scheduling by opcode. Zero first (before any store of its block).
