@@ -173,6 +173,25 @@ TEST(BenchCli, MarkdownAndKeptLibrariesForASmallChain) {
     EXPECT_TRUE(fs::exists(keep / f / (std::string(f) + ".so"))) << f;
 }
 
+// --copies N: each library is loaded from N files (the built one and N - 1 copies of
+// it), the timing line says the rows are medians over them, and a count out of range is
+// refused naming the option.
+TEST(BenchCli, TimesEachLibraryFromItsCopies) {
+  const ChainDir chain(2);
+  const fs::path keep = chain.dir() / "libs";
+  testing::ProcessResult r =
+      runCommand(bench(chain.urdf(), "--quick --copies 2 --keep " + shellQuote(keep.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("the median over 2 copies of each library file"), std::string::npos) << r.out;
+  for (const char* f : {"rnea_value", "rnea_jacobian_dense", "aba_jacobian"}) {
+    EXPECT_TRUE(fs::exists(keep / (std::string(f) + "_copy1.so"))) << f;
+    EXPECT_FALSE(fs::exists(keep / (std::string(f) + "_copy2.so"))) << f;
+  }
+  r = runCommand(bench(chain.urdf(), "--quick --copies 0"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--copies"), std::string::npos) << r.err;
+}
+
 TEST(BenchCli, BadArgumentsFailWithAMessage) {
   const fs::path urdf = testing::sourceDir() / "examples" / "robots" / "arm7.urdf";
   testing::ProcessResult r = runCommand(shellQuote(cliPath().string()) + " bench --json");
