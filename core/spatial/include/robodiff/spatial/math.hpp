@@ -19,6 +19,19 @@ template <class S> inline S sqrt(const S& x) { using std::sqrt; return sqrt(x); 
 // The constant c as a scalar of type S (for a symbolic scalar: a constant node).
 template <class S> inline S constant(double c) { return S(c); }
 
+namespace detail {
+inline double selectPositive(double condition, double if_positive, double otherwise) {
+  return condition > 0 ? if_positive : otherwise;
+}
+}  // namespace detail
+
+// condition > 0 ? if_positive : otherwise, both already evaluated; a symbolic scalar
+// provides its own branch-free selectPositive (found by argument-dependent lookup).
+template <class S> inline S selectPositive(const S& condition, const S& if_positive, const S& otherwise) {
+  using detail::selectPositive;
+  return selectPositive(condition, if_positive, otherwise);
+}
+
 }  // namespace robodiff::math
 
 namespace robodiff {
