@@ -3,8 +3,10 @@
 //   - by calling the compiled library directly (the bare function),
 //   - through Client in local mode (the same library, loaded from the cache),
 //   - through Client over iceoryx (shm) and over DDS,
-// reporting each mode's cost per call and its overhead over the bare call; then the
-// jitter of examples/controller/controller_loop at 1 kHz (10 s, local and shm).
+// reporting each mode's cost per call and its overhead over the bare call; local
+// evaluateBatch per knot against as many single calls (1, 20 and 1000 knots: the
+// library's batched entry point, SIMD lanes); then the jitter of
+// examples/controller/controller_loop at 1 kHz (10 s, local and shm).
 //   build/bin/client_bench [--robot URDF] [--calls N] [--loop-seconds S]
 #include <algorithm>
 #include <chrono>
@@ -61,6 +63,53 @@ void check(const Status& s) {
   }
 }
 
+// Per knot: `knots` single evaluate() calls, and one evaluateBatch of those knots.
+struct BatchRow {
+  std::size_t knots = 0;
+  double single_ns = 0, batch_ns = 0;
+  double max_relative = 0;  // the largest relative difference between the two's values
+};
+
+// The two paths' values over the same knots: the largest relative difference.
+double maxRelativeDifference(const client::Function& f, std::size_t knots, const std::vector<double>& in) {
+  const std::size_t in_n = f.inputCount(), out_n = f.outputCount();
+  std::vector<double> single(knots * out_n), batch(knots * out_n);
+  for (std::size_t k = 0; k < knots; ++k)
+    check(f.evaluate({in.data() + k * in_n, in_n}, {single.data() + k * out_n, out_n}));
+  check(f.evaluateBatch(knots, in, batch));
+  double worst = 0;
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    if (batch[i] != single[i])
+      worst = std::max(worst, std::abs(batch[i] - single[i]) / std::max(std::abs(batch[i]), std::abs(single[i])));
+  return worst;
+}
+
+// About `total_knots` knots per measurement; rounds interleaved, the best of each (the
+// least disturbed by the machine's other work).
+BatchRow timeBatch(const client::Function& f, std::size_t knots, int total_knots) {
+  const std::size_t in_n = f.inputCount(), out_n = f.outputCount();
+  std::vector<double> in(knots * in_n), out(knots * out_n);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = 0.2 * std::sin(1.0 + 0.37 * i);
+  auto singles = [&] {
+    for (std::size_t k = 0; k < knots; ++k)
+      check(f.evaluate({in.data() + k * in_n, in_n}, {out.data() + k * out_n, out_n}));
+  };
+  auto batch = [&] { check(f.evaluateBatch(knots, in, out)); };
+  const int reps = std::max<int>(1, total_knots / static_cast<int>(knots));
+  auto perKnot = [&](auto&& call) {
+    const auto start = Clock::now();
+    for (int r = 0; r < reps; ++r) call();
+    return std::chrono::duration<double, std::nano>(Clock::now() - start).count() / (reps * double(knots));
+  };
+  singles(), batch();  // warm-up: this thread's buffers
+  BatchRow row{knots, 1e30, 1e30, maxRelativeDifference(f, knots, in)};
+  for (int round = 0; round < 5; ++round) {
+    row.single_ns = std::min(row.single_ns, perKnot(singles));
+    row.batch_ns = std::min(row.batch_ns, perKnot(batch));
+  }
+  return row;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -87,6 +136,8 @@ int main(int argc, char** argv) {
     Timing t;
   };
   std::vector<Row> rows;
+  std::vector<BatchRow> batch_rows;
+  std::uint32_t batch_width = 0;
   std::string loop_report;
   {
     bench::Daemon daemon(ROBODIFFD_PATH, cache_dir, domain, dir / "robodiffd.log");
@@ -139,6 +190,9 @@ int main(int argc, char** argv) {
     rows.push_back({std::string("Client, ") + client::toString(f_dds.mode()) + " mode",
                     timeCalls([&] { check(f_dds.evaluate(in, out)); }, calls / 200)});
 
+    batch_width = bare.batchWidth();
+    for (const std::size_t knots : {1, 20, 1000}) batch_rows.push_back(timeBatch(f_local, knots, calls));
+
     // The 1 kHz controller loop, as a process of its own, in local and shm modes.
     for (const char* address : {"local --realtime", "local", "shm"}) {
       const std::string command = (fs::path(ROBODIFFD_PATH).parent_path() / "controller_loop").string() +
@@ -160,7 +214,16 @@ int main(int argc, char** argv) {
   for (const Row& r : rows)
     std::printf("| %-28s | %12.1f | %12.1f | %12.1f | %15.1f ns |\n", r.mode.c_str(), r.t.mean_ns, r.t.p50_ns,
                 r.t.p99_ns, r.t.mean_ns - bare_ns);
-  std::printf("\ntargets: local overhead < 50 ns per call; shm p50 < 10 us, p99 < 50 us\n\n%s", loop_report.c_str());
+  std::printf("\ntargets: local overhead < 50 ns per call; shm p50 < 10 us, p99 < 50 us\n\n");
+  std::printf("local evaluateBatch (batch width %u) against as many single calls, ns per knot:\n\n", batch_width);
+  std::printf("| %5s | %18s | %18s | %24s | %18s |\n", "knots", "single calls", "evaluateBatch",
+              "ratio (single / batch)", "max rel. diff.");
+  std::printf("|%s|%s|%s|%s|%s|\n", std::string(7, '-').c_str(), std::string(20, '-').c_str(),
+              std::string(20, '-').c_str(), std::string(26, '-').c_str(), std::string(20, '-').c_str());
+  for (const BatchRow& r : batch_rows)
+    std::printf("| %5zu | %18.1f | %18.1f | %23.2fx | %18.1e |\n", r.knots, r.single_ns, r.batch_ns,
+                r.single_ns / r.batch_ns, r.max_relative);
+  std::printf("\n%s", loop_report.c_str());
   fs::remove_all(dir);
   return 0;
 }

@@ -1,6 +1,6 @@
-// The Local hot path: no allocation after a thread's first call (counted by replacing the
-// global operator new/delete of this executable), and its overhead over calling the
-// compiled function directly.
+// The Local hot path: no allocation after a thread's first call, single or batched
+// (counted by replacing the global operator new/delete of this executable), and its
+// overhead over calling the compiled function directly.
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -106,6 +106,36 @@ TEST(ClientHotPath, LocalEvaluateNeverAllocates) {
   EXPECT_EQ(allocations.exchange(0), 0u) << "allocations in 10,000 Local evaluate calls";
   EXPECT_EQ(failures, 0);
   EXPECT_TRUE(ref.matches(out));
+}
+
+// The batched entry point's scratch (regrouped knots, the batch work buffer) is sized for
+// a whole chunk by the thread's first batch: a first batch of one knot, then longer ones
+// (remainders, several chunks) allocate nothing.
+TEST(ClientHotPath, LocalEvaluateBatchNeverAllocatesAfterTheFirst) {
+  SharedServer& shared = SharedServer::get();
+  Client local(shared.server().options(Mode::Local));
+  const client::Function f = local.function(local.loadModel(arm7Text()), kRneaJacobianSpec);
+  ASSERT_EQ(f.mode(), Mode::Local);
+  const RneaReference ref = RneaReference::at(shared.model(), 13);
+  constexpr std::size_t kMaxKnots = 1000;
+  std::vector<double> in, out(kMaxKnots * f.outputCount());
+  for (std::size_t k = 0; k < kMaxKnots; ++k)
+    in.insert(in.end(), ref.inputs.data(), ref.inputs.data() + ref.inputs.size());
+  auto batch = [&](std::size_t knots) {
+    return f.evaluateBatch(knots, {in.data(), knots * f.inputCount()}, {out.data(), knots * f.outputCount()}).ok();
+  };
+  ASSERT_TRUE(batch(1));  // this thread's first batch
+
+  int failures = 0;
+  counting = true;
+  for (int i = 0; i < 200; ++i)
+    for (const std::size_t knots : {1, 7, 8, 9, 20}) failures += batch(knots) ? 0 : 1;
+  failures += batch(kMaxKnots) ? 0 : 1;
+  counting = false;
+  EXPECT_EQ(allocations.exchange(0), 0u) << "allocations in 1,001 Local evaluateBatch calls";
+  EXPECT_EQ(failures, 0);
+  for (std::size_t k : {std::size_t{0}, kMaxKnots - 1})
+    EXPECT_TRUE(ref.matches({out.begin() + k * f.outputCount(), out.begin() + (k + 1) * f.outputCount()})) << k;
 }
 
 TEST(ClientHotPath, ShmEvaluateNeverAllocatesAfterWarmUp) {

@@ -29,9 +29,10 @@ Status Function::Impl::evaluateLocal(const detail::LocalEvaluator& evaluator, st
     return runtime::checkSizes(id, blocks, knots, inputs.size(), outputs.size(), batch);
   if (!runtime::allFinite(inputs)) [[unlikely]]
     return runtime::checkFinite(blocks, inputs, batch);
-  const double* in = inputs.data();
-  double* out = outputs.data();
-  for (std::uint64_t k = 0; k < knots; ++k, in += in_n, out += out_n) evaluator.evaluate(in, out);
+  if (batch)
+    evaluator.evaluateBatch(knots, inputs.data(), outputs.data());  // the library's batched entry point
+  else
+    evaluator.evaluate(inputs.data(), outputs.data());
   return {};
 }
 

@@ -2,7 +2,8 @@
 // A function evaluated in this process: the compiled library of a verified cache
 // artifact (kept pinned, so the cache never evicts it while loaded), called directly
 // with the caller's memory. The block offsets are computed once at load; a call only
-// points the per-thread pointer arrays at the caller's spans.
+// points the per-thread pointer arrays at the caller's spans. Batches go through the
+// library's batched entry point (RD_W knots in SIMD lanes), regrouped per chunk.
 
 #include <cstddef>
 #include <cstdint>
@@ -42,6 +43,17 @@ class LocalEvaluator {
     eval_(ip, op, t.work.data());
   }
 
+  // `knots` knots, knot after knot (as the client holds them), through the batched entry
+  // point: chunks of whole batch widths (the library pads a last partial width itself),
+  // each regrouped block after block (abi.h's batched layout) on the way in and out. A
+  // library of width 1 (a plain loop) takes the single-knot path, without regrouping.
+  // No lock; no allocation after this thread's first batch (the scratch is sized for a
+  // whole chunk, whatever `knots`).
+  void evaluateBatch(std::uint64_t knots, const double* in, double* out) const noexcept;
+
+  // Knots the batched entry point evaluates together (1: it is not used).
+  std::uint32_t batchWidth() const { return width_; }
+
   const cache::Artifact& artifact() const { return artifact_; }
 
  private:
@@ -49,8 +61,15 @@ class LocalEvaluator {
   codegen::CompiledFunction function_;
   rpc::GetFunctionReply layout_;
   std::vector<std::uint32_t> in_offsets_, out_offsets_;  // start of each block
-  std::size_t work_size_ = 0;
+  std::vector<std::uint32_t> in_sizes_, out_sizes_;      // doubles of each block
+  std::size_t in_count_ = 0, out_count_ = 0;             // doubles per knot
+  std::size_t work_size_ = 0, batch_work_size_ = 0;
+  std::uint32_t width_ = 1;        // the library's batch width
+  std::uint64_t chunk_knots_ = 0;  // knots per batched call: a multiple of width_
   robodiff_eval_fn eval_ = nullptr;
+  robodiff_eval_batch_fn eval_batch_ = nullptr;
+
+  void evaluateChunk(std::uint64_t n, const double* in, double* out, ThreadBuffers& t) const noexcept;
 };
 
 }  // namespace robodiff::client::detail

@@ -107,7 +107,9 @@ class Function {
   // for the output blocks concatenated (sparse blocks: their nnz values in CSR order).
   Status evaluate(std::span<const double> inputs, std::span<double> outputs) const;
   Status evaluate(std::span<const double> inputs, std::span<double> outputs, std::chrono::nanoseconds timeout) const;
-  // knots one after another, in and out. Local: one compiled call per knot.
+  // knots one after another, in and out. Local: the library's batched entry point (its
+  // batch width of knots in SIMD lanes), results within 1e-12 relative of single calls
+  // and bit-identical to the server's EvaluateBatch on the same library.
   Status evaluateBatch(std::size_t knots, std::span<const double> inputs, std::span<double> outputs,
                        std::chrono::nanoseconds timeout = std::chrono::nanoseconds(0)) const;
   // The same, returning at once; the spans must stay valid until the future is ready.
