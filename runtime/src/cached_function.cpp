@@ -33,7 +33,7 @@ void expectSizes(const std::string& sizes_json, codegen::FunctionExpectations& e
 codegen::CompiledFunction openCachedFunction(const cache::Artifact& artifact, const FunctionSpec& spec) {
   const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(artifact.library());
   codegen::FunctionExpectations expected;
-  expected.name = artifact.entry().info.function.empty() ? std::string(functionInfo(spec.function).name)
+  expected.name = artifact.entry().info.function.empty() ? spec.functionName()
                                                          : artifact.entry().info.function;
   expectSizes(artifact.entry().info.sizes, expected);
   return library.function(expected);

@@ -53,6 +53,7 @@ std::vector<std::pair<std::string, FunctionSpec>> exampleSpecs(const Model& mode
   std::vector<std::pair<std::string, FunctionSpec>> specs;
   for (const auto& entry : fs::directory_iterator(testing::sourceDir() / "examples/specs")) {
     FunctionSpec spec = loadFunctionSpec(entry.path().string());
+    if (spec.isUser()) continue;  // user functions: tests/functions/user_examples_test.cpp
     for (InputSpec& in : spec.inputs)
       if (in.fixed) in.fixed->assign(static_cast<std::size_t>(inputSize(model, in.name)), 0.0);
     if (functionInfo(spec.function).needs_frame && !model.findFrame(spec.frame)) spec.frame = model.frames.back().name;

@@ -265,7 +265,7 @@ PreparedBuild prepareBuild(const Model& model, const FunctionSpec& spec, const s
   if (!function_name.empty()) p.options.builder.name = function_name;
   p.options.compiler.compiler = compiler;
   // The C name buildFunction gives the function.
-  const std::string c_name = function_name.empty() ? std::string(functionInfo(spec.function).name) : function_name;
+  const std::string c_name = function_name.empty() ? spec.functionName() : function_name;
   const codegen::CompilerOptions effective = compilerOptionsFor(spec.build, p.options.compiler);
 
   p.identity.model_hash = canonicalHash(model);

@@ -152,11 +152,11 @@ void openCompiled(BatchFunction::Impl& impl, const Model& model, const std::stri
     target.spec_text = normalizedSpecJson(spec);
     const std::vector<workers::BuildStatus> done = builder.buildAll({target});
     if (done.at(0).state == workers::BuildState::Failed)
-      throw std::runtime_error("building " + std::string(functionInfo(spec.function).name) + " for " + model.name +
+      throw std::runtime_error("building " + spec.functionName() + " for " + model.name +
                                " failed: " + done[0].message);
     artifact = cache.find(prepared.key);
     if (!artifact)
-      throw std::runtime_error("the build of " + std::string(functionInfo(spec.function).name) +
+      throw std::runtime_error("the build of " + spec.functionName() +
                                " finished but its library is not in the cache " + cache.dir().string());
     tell("built");
   }

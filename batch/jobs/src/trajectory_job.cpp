@@ -57,7 +57,7 @@ nlohmann::json runTrajectoryKind(const nlohmann::json& p, const BatchJobContext&
   const TrajectoryReport report = runTrajectoryJob(function, robot.model, spec, job);
   progress(1.0, "wrote " + report.out.filename().string());
   return {{"kind", "trajectory"},
-          {"function", functionInfo(spec.function).name},
+          {"function", spec.functionName()},
           {"backend", toString(function.backend())},
           {"knots", report.knots},
           {"out", report.out.filename().string()},

@@ -15,6 +15,9 @@
 #include "robodiff/symbolic/substitute.hpp"
 #include "robodiff/symbolic/sym.hpp"
 #include "robodiff/symbolic/tracer.hpp"
+#include "output_blocks.hpp"
+#include "user_function_builder.hpp"
+#include "user_primitive_rules.hpp"
 
 namespace robodiff {
 
@@ -67,31 +70,23 @@ std::vector<NodeId> sideBySide(const std::map<std::string, std::vector<NodeId>>&
   return out;
 }
 
-// -M^-1 B for an n x n row-major block B, from the factors of M = L^T D L (LD as
-// factorizeMassMatrix leaves them, row-major; dynamics/minv.hpp), column by column:
-// L^T y = b, z = D^-1 y, L x = z. L is nonzero only along ancestor chains, and a column
-// of an RNEA partial only on its joint's branch, so most products are with structural
-// zeros and fold away as they are built. Against the dense product M^-1 B (which the
-// builder used before): free-flying Talos ABA + Jacobian 181,520 -> 153,680 operations
-// (36.5-37.1 -> 33.1 µs); fixed Talos 63,615 -> 59,419.
+// -M^-1 B for an n x n row-major block B, by solves with M's tree factors (LD as
+// factorizeMassMatrix leaves them, row-major; user_primitive_rules.hpp). Against the
+// dense product M^-1 B (which the builder used before): free-flying Talos ABA + Jacobian
+// 181,520 -> 153,680 operations (36.5-37.1 -> 33.1 µs); fixed Talos 63,615 -> 59,419.
 std::vector<NodeId> solveWithMassFactors(Graph& graph, const Model& model, const std::vector<NodeId>& LD,
                                          const std::vector<NodeId>& B, int n) {
-  const std::vector<int> lambda = dofParents(model);
-  auto at = [&](const std::vector<NodeId>& m, int r, int c) { return Sym(graph, m[static_cast<std::size_t>(r) * n + c]); };
-  std::vector<Sym> inverse_diagonal;
-  for (int i = 0; i < n; ++i) inverse_diagonal.push_back(Sym(1.0) / at(LD, i, i));
-  std::vector<NodeId> X(static_cast<std::size_t>(n) * n);
-  std::vector<Sym> x(static_cast<std::size_t>(n));
-  for (int c = 0; c < n; ++c) {
-    for (int i = 0; i < n; ++i) x[i] = -at(B, i, c);
-    for (int i = n - 1; i >= 0; --i)  // L^T y = -b
-      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[j] = x[j] - at(LD, i, j) * x[i];
-    for (int i = 0; i < n; ++i) x[i] = x[i] * inverse_diagonal[i];
-    for (int i = 0; i < n; ++i)  // L x = z
-      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[i] = x[i] - at(LD, i, j) * x[j];
-    for (int r = 0; r < n; ++r) X[static_cast<std::size_t>(r) * n + c] = x[r].nodeIn(graph);
-  }
-  return X;
+  MatX<Sym> factors(n, n), rhs(n, n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      factors(r, c) = Sym(graph, LD[static_cast<std::size_t>(r) * n + c]);
+      rhs(r, c) = -Sym(graph, B[static_cast<std::size_t>(r) * n + c]);
+    }
+  const MatX<Sym> X = detail::solveWithMassFactors(model, factors, rhs);
+  std::vector<NodeId> out;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) out.push_back(X(r, c).nodeIn(graph));
+  return out;
 }
 
 // The working trace: the model function on symbolic inputs, in a graph that may also
@@ -334,41 +329,10 @@ BuiltFunction buildOneWay(const Model& model, const FunctionSpec& spec, const Fu
       def.outputs.push_back(codegen::OutputBlock::dense(b.name, rows, cols, entries[k]));
     } else if (o.kind == OutputKind::Jacobian) {
       b.rows = value_size, b.cols = tangent_cols;
-      if (o.layout == Layout::Dense) {
-        def.outputs.push_back(codegen::OutputBlock::dense(b.name, b.rows, b.cols, entries[k]));
-      } else {
-        const symbolic::SparsityPattern p = symbolic::patternOfNodes(b.rows, b.cols, entries[k]);
-        std::vector<NodeId> nz;
-        for (int r = 0; r < p.rows; ++r)
-          for (int e = p.row_ptr[r]; e < p.row_ptr[r + 1]; ++e)
-            nz.push_back(entries[k][static_cast<std::size_t>(r) * b.cols + p.col_idx[e]]);
-        def.outputs.push_back(codegen::OutputBlock::sparse(
-            b.name, b.rows, b.cols, std::vector<std::uint32_t>(p.row_ptr.begin(), p.row_ptr.end()),
-            std::vector<std::uint32_t>(p.col_idx.begin(), p.col_idx.end()), std::move(nz)));
-      }
+      def.outputs.push_back(detail::matrixBlock(b.name, b.rows, b.cols, entries[k], o.layout == Layout::Sparse));
     } else {
-      const int n = tangent_cols;
-      b.rows = b.cols = n;
-      auto lower = [&](int i, int j) {
-        if (i < j) std::swap(i, j);
-        return entries[k][static_cast<std::size_t>(i) * (i + 1) / 2 + j];
-      };
-      if (o.layout == Layout::Dense) {
-        std::vector<NodeId> full;
-        for (int i = 0; i < n; ++i)
-          for (int j = 0; j < n; ++j) full.push_back(lower(i, j));
-        def.outputs.push_back(codegen::OutputBlock::dense(b.name, n, n, std::move(full)));
-      } else {
-        std::vector<std::uint32_t> row_ptr{0}, col_idx;
-        std::vector<NodeId> nz;
-        for (int i = 0; i < n; ++i) {
-          for (int j = 0; j <= i; ++j)
-            if (!out.isConstant(lower(i, j), 0.0)) col_idx.push_back(j), nz.push_back(lower(i, j));
-          row_ptr.push_back(static_cast<std::uint32_t>(nz.size()));
-        }
-        def.outputs.push_back(
-            codegen::OutputBlock::sparse(b.name, n, n, std::move(row_ptr), std::move(col_idx), std::move(nz)));
-      }
+      b.rows = b.cols = tangent_cols;
+      def.outputs.push_back(detail::hessianBlock(b.name, tangent_cols, entries[k], o.layout == Layout::Sparse, out));
     }
     b.nnz = def.outputs.back().size();
     built.outputs.push_back(std::move(b));
@@ -401,6 +365,7 @@ std::size_t builtOperations(const BuiltFunction& f) {
 }
 
 BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  if (spec.user) return detail::buildUserFunction(model, spec, options);
   const bool rnea_jacobian = spec.function == ModelFunction::Rnea &&
                              std::any_of(spec.outputs.begin(), spec.outputs.end(),
                                          [](const OutputSpec& o) { return o.kind == OutputKind::Jacobian; });

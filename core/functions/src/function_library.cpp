@@ -97,6 +97,7 @@ std::string describeFunction(const Model& model, const FunctionSpec& spec, const
     const codegen::OutputBlock& block = built.definition.outputs[k];
     json j = {{"name", o.name}, {"kind", toString(o.kind)}, {"rows", o.rows}, {"cols", o.cols}, {"nnz", o.nnz},
               {"layout", o.layout == Layout::Dense ? "dense" : "sparse"}};
+    if (spec.user) j["user_kind"] = toString(spec.user->outputs[k].kind);
     if (o.kind != OutputKind::Value) j["wrt"] = o.wrt;
     if (o.kind == OutputKind::Hessian)
       j["triangle"] = o.layout == Layout::Dense ? "full symmetric matrix" : "lower triangle";
@@ -110,6 +111,9 @@ std::string describeFunction(const Model& model, const FunctionSpec& spec, const
                 {"trace_seconds", built.timings.trace_seconds},
                 {"differentiate_seconds", built.timings.differentiate_seconds},
                 {"assemble_seconds", built.timings.assemble_seconds}};
+  if (built.rule_operations)  // a user function: what its primitives' derivative rules save
+    d["derivative_operations"] = {{"with_primitive_rules", built.rule_operations},
+                                  {"differentiating_primitive_traces", built.traced_operations}};
   if (generated) {
     json& b = d["build"];
     b["operations"] = generated->info.operations;

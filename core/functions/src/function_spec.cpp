@@ -7,6 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "user_function_canonical.hpp"
+#include "user_function_parse.hpp"
+
 namespace robodiff {
 
 using nlohmann::json;
@@ -47,7 +50,16 @@ const char* toString(OutputKind k) {
 const InputSpec& FunctionSpec::input(const std::string& name) const {
   for (const InputSpec& i : inputs)
     if (i.name == name) return i;
-  throw std::invalid_argument(std::string(toString(function)) + " has no input '" + name + "'");
+  throw std::invalid_argument(functionName() + " has no input '" + name + "'");
+}
+
+std::string FunctionSpec::functionName() const { return user ? user->name : std::string(toString(function)); }
+
+std::vector<std::string> FunctionSpec::inputNames() const {
+  if (!user) return functionInfo(function).inputs;
+  std::vector<std::string> names;
+  for (const InputSpec& i : inputs) names.push_back(i.name);
+  return names;
 }
 
 namespace {
@@ -122,15 +134,18 @@ class Parser {
   }
 
   FunctionSpec parse(const std::string& text) {
-    json root;
+    nlohmann::ordered_json ordered;
     try {
-      root = json::parse(text);
-    } catch (const json::parse_error& e) {
+      ordered = nlohmann::ordered_json::parse(text);
+    } catch (const nlohmann::ordered_json::parse_error& e) {
       fail("", std::string("not valid JSON: ") + e.what());
     }
-    if (!root.is_object()) fail("", "a spec is a JSON object");
+    if (!ordered.is_object()) fail("", "a spec is a JSON object");
+    if (detail::isUserFunctionJson(ordered)) return parseUser(ordered);
+    const json root = json::parse(text);
     onlyKeys(root, "", {"function", "inputs", "outputs", "frame", "reference", "build"});
     FunctionSpec spec;
+    parseBuild(root, spec);
 
     if (!root.contains("function")) fail("function", "missing (one of: " + functionList() + ")");
     const std::string name = string(root["function"], "function");
@@ -209,6 +224,19 @@ class Parser {
       }
     }
 
+    return spec;
+  }
+
+  // A user function: inputs, defines, outputs (user_function_parse.cpp), build options.
+  FunctionSpec parseUser(const nlohmann::ordered_json& ordered) {
+    FunctionSpec spec;
+    spec.user = std::make_shared<const UserFunction>(detail::parseUserFunction(ordered, source_));
+    detail::fillSpecView(spec);
+    parseBuild(json::parse(ordered.dump()), spec);
+    return spec;
+  }
+
+  void parseBuild(const json& root, FunctionSpec& spec) const {
     if (root.contains("build")) {
       const json& b = root["build"];
       if (!b.is_object()) fail("build", "must be an object");
@@ -225,7 +253,6 @@ class Parser {
         (std::string(flag) == "march_native" ? spec.build.march_native : spec.build.fast_math) = b[flag].get<bool>();
       }
     }
-    return spec;
   }
 
  private:
@@ -252,6 +279,7 @@ FunctionSpec loadFunctionSpec(const std::string& path) {
 }
 
 std::string normalizedSpecJson(const FunctionSpec& spec) {
+  if (spec.user) return detail::canonicalUserFunctionJson(spec);
   json j;
   j["function"] = toString(spec.function);
   json inputs = json::object();

@@ -3,13 +3,14 @@
 #include <random>
 
 #include "robodiff/functions/model_function.hpp"
+#include "user_evaluator.hpp"
 
 namespace robodiff {
 
 std::vector<Eigen::VectorXd> completeInputs(const FunctionSpec& spec, const std::vector<Eigen::VectorXd>& variable) {
   std::vector<Eigen::VectorXd> all;
   std::size_t next = 0;
-  for (const std::string& name : functionInfo(spec.function).inputs) {
+  for (const std::string& name : spec.inputNames()) {
     const InputSpec& in = spec.input(name);
     if (in.fixed) {
       all.push_back(Eigen::Map<const Eigen::VectorXd>(in.fixed->data(), static_cast<Eigen::Index>(in.fixed->size())));
@@ -22,10 +23,27 @@ std::vector<Eigen::VectorXd> completeInputs(const FunctionSpec& spec, const std:
   return all;
 }
 
+namespace {
+
+// A user function's variable inputs: configurations within limits, vectors in [-1, 1].
+std::vector<Eigen::VectorXd> randomUserInputs(const Model& model, const FunctionSpec& spec, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::VectorXd> out;
+  const std::map<std::string, int> sizes = detail::inputSizes(model, *spec.user);
+  for (const UserInput& in : spec.user->inputs) {
+    if (in.kind == UserInput::Kind::Configuration) out.push_back(randomConfiguration(model, rng));
+    if (in.kind == UserInput::Kind::Vector) out.push_back(Eigen::VectorXd::NullaryExpr(sizes.at(in.name), [&] { return u(rng); }));
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<Eigen::VectorXd> randomRuntimeInputs(const Model& model, const FunctionSpec& spec, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<Eigen::VectorXd> out;
+  if (spec.user) return randomUserInputs(model, spec, rng);
   for (const std::string& name : functionInfo(spec.function).inputs) {
     if (spec.input(name).fixed) continue;
     if (name == "q") {

@@ -132,6 +132,8 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
     nodes = built.graph->size();
     FunctionLayout layout = FunctionLayout::fromDefinition(built.definition, f.spec());
     evaluator = std::make_shared<const InterpretedEvaluator>(std::move(layout), std::move(interpreter));
+  } catch (const SpecTooLarge& e) {
+    failure = {StatusCode::ResourceExhausted, e.what()};
   } catch (const SpecError& e) {
     failure = {StatusCode::InvalidArgument, e.what()};
   } catch (const symbolic::GraphTooLarge& e) {

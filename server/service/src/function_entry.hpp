@@ -54,7 +54,7 @@ class FunctionEntry {
   const std::shared_ptr<const ModelEntry>& modelEntry() const { return model_; }
   const FunctionSpec& spec() const { return spec_; }
   const std::string& specText() const { return spec_text_; }
-  const char* functionName() const { return toString(spec_.function); }  // "rnea"
+  std::string functionName() const { return spec_.functionName(); }  // "rnea", or a user function's name
   std::uint64_t sequence() const { return sequence_; }                   // order of creation
 
   rpc::FunctionState state() const { return state_.load(std::memory_order_acquire); }

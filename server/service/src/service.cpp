@@ -205,6 +205,8 @@ Status Service::getFunction(const CallContext& ctx, const rpc::GetFunctionReques
     FunctionSpec spec;
     try {
       spec = parseFunctionSpec(request.spec_json, "spec_json");
+    } catch (const SpecTooLarge& e) {
+      return {StatusCode::ResourceExhausted, e.what()};
     } catch (const SpecError& e) {
       return {StatusCode::InvalidArgument, e.what()};
     }

@@ -90,6 +90,10 @@ struct BuiltFunction {
   std::size_t trace_nodes = 0;             // size of the working graph before assembly
   std::string method;                      // how the derivatives were built, in words
   BuildTimings timings;
+  // User functions with derivatives: operations with the primitives' own derivative
+  // rules (what is built), and differentiating the primitives' traces instead (0: not
+  // built, e.g. past the node limit).
+  std::size_t rule_operations = 0, traced_operations = 0;
 };
 
 // Throws SpecError when the spec does not fit the model (a fixed input of the wrong

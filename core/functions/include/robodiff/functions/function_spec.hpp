@@ -5,12 +5,14 @@
 // holds a documented spec for each function.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "robodiff/dynamics/jacobian.hpp"
+#include "robodiff/functions/user_function.hpp"
 
 namespace robodiff {
 
@@ -51,8 +53,15 @@ struct BuildOptions {
   bool fast_math = false;           // never on unless asked: it changes results
 };
 
+// A spec is either a model function ("function": "rnea", the form every earlier spec
+// has) or a user function ("inputs" / "define" / "outputs", user_function.hpp). For a
+// user function, `inputs` lists its inputs in order and `outputs` one entry per output
+// with the block's wire kind (a gradient or a vector-Jacobian product is a value-like
+// vector; a Hessian without weights has the fixed weight 1), so code that only reads
+// blocks handles both forms alike.
 struct FunctionSpec {
   ModelFunction function = ModelFunction::Rnea;
+  std::shared_ptr<const UserFunction> user;  // set: a user function
   std::vector<InputSpec> inputs;    // every input of the function, in its order
   std::vector<OutputSpec> outputs;
   std::string frame;                // fk, frame_jacobian
@@ -60,6 +69,11 @@ struct FunctionSpec {
   BuildOptions build;
 
   const InputSpec& input(const std::string& name) const;
+  bool isUser() const { return user != nullptr; }
+  // "rnea", or the user function's name: the C name of its generated function.
+  std::string functionName() const;
+  // Every input's name, in order (fixed ones included).
+  std::vector<std::string> inputNames() const;
 };
 
 // A spec that cannot be used. The message names the source, the field (a JSON path
@@ -67,6 +81,13 @@ struct FunctionSpec {
 class SpecError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// A spec past the limits on expression size, nesting or counts (UserFunctionLimits):
+// a resource error (RESOURCE_EXHAUSTED at the service), not a mistake in meaning.
+class SpecTooLarge : public SpecError {
+ public:
+  using SpecError::SpecError;
 };
 
 FunctionSpec parseFunctionSpec(const std::string& json_text, const std::string& source = "<spec>");

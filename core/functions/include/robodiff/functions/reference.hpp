@@ -40,4 +40,20 @@ Eigen::MatrixXd finiteDifferenceHessian(const Model& model, const FunctionSpec& 
                                         const std::vector<Eigen::VectorXd>& all, const Eigen::VectorXd& weights,
                                         const std::vector<std::string>& wrt, double h = 1e-4);
 
+// User functions (spec.user): the double evaluation of the same expressions
+// (user_evaluator.hpp on double) and central finite differences of it, output by output,
+// in the layout of the built blocks as matrices: a value rows x cols, a Jacobian value
+// entries (a configuration's: nv tangent entries) x tangent columns, a gradient and a
+// vector-Jacobian product n x 1, a Hessian the full n x n matrix. Configurations are
+// moved with integrate, and a configuration-valued expression is compared by its
+// difference in the tangent space.
+std::vector<Eigen::MatrixXd> userReferenceOutputs(const Model& model, const FunctionSpec& spec,
+                                                  const std::vector<Eigen::VectorXd>& all, double h_jacobian = 1e-6,
+                                                  double h_hessian = 1e-4);
+
+// The value of output k's expression at `all` (flattened row-major; a configuration's
+// coordinates), and whether it is a configuration.
+Eigen::VectorXd userReferenceValue(const Model& model, const FunctionSpec& spec, std::size_t output,
+                                   const std::vector<Eigen::VectorXd>& all, bool* configuration = nullptr);
+
 }  // namespace robodiff
