@@ -1,7 +1,8 @@
 // `robodiff check`: a spec's function, generated (or interpreted), cross-checked at
 // random states against what does not share its code: the value against core/dynamics
-// in double, Jacobians and Hessians against central finite differences of it, and the
-// generated code against the interpreter.
+// in double (a user function's: the double evaluation of its expressions), derivatives
+// against central finite differences of it, and the generated code against the
+// interpreter.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -37,6 +38,10 @@ struct CheckArgs {
 constexpr double kValueTolerance = 1e-10, kInvertingValueTolerance = 1e-9;
 constexpr double kJacobianTolerance = 1e-5, kHessianTolerance = 1e-4;
 constexpr double kBackendTolerance = 1e-11, kInvertingBackendTolerance = 1e-9;
+// A user function may invert the mass matrix anywhere (aba, minv), so its values and
+// backends are held to the inverting tolerances; its expressions are arbitrary, with
+// larger higher-order terms in the differences' truncation error.
+constexpr double kUserDerivativeTolerance = 1e-4, kUserHessianTolerance = 1e-3;
 
 // One output block against one expectation over all states: the worst absolute and
 // relative error and where the relative one is. Relative errors are elementwise,
@@ -75,46 +80,68 @@ std::string scientific(double x) {
   return buf;
 }
 
+// Output k against its reference: what the reference is, and the tolerance.
+Comparison referenceComparison(const FunctionSpec& spec, std::size_t k, const std::string& name) {
+  if (spec.isUser()) {
+    switch (spec.user->outputs[k].kind) {
+      case UserOutputKind::Value: return {name, "double evaluation", kInvertingValueTolerance};
+      case UserOutputKind::Hessian: return {name, "second finite differences", kUserHessianTolerance};
+      default: return {name, "finite differences", kUserDerivativeTolerance};  // Jacobian, gradient, vjp
+    }
+  }
+  const bool inverting = spec.function == ModelFunction::Aba || spec.function == ModelFunction::Minv;
+  switch (spec.outputs[k].kind) {
+    case OutputKind::Value:
+      return {name, "reference (core/dynamics)", inverting ? kInvertingValueTolerance : kValueTolerance};
+    case OutputKind::Jacobian: return {name, "finite differences", kJacobianTolerance};
+    case OutputKind::Hessian: return {name, "second finite differences", kHessianTolerance};
+  }
+  return {name, "?", 0.0};
+}
+
+// Output k of the generated code against the interpreter.
+Comparison backendComparison(const FunctionSpec& spec, const std::string& name) {
+  const bool inverting =
+      spec.isUser() || spec.function == ModelFunction::Aba || spec.function == ModelFunction::Minv;
+  return {name, "interpreted", inverting ? kInvertingBackendTolerance : kBackendTolerance};
+}
+
+// Every output's reference at the runtime inputs, in the layout of the built blocks.
+std::vector<Eigen::MatrixXd> referenceOutputs(const Model& model, const SpecFunction& f,
+                                              const std::vector<Eigen::VectorXd>& runtime) {
+  const FunctionSpec& spec = f.spec();
+  const std::vector<Eigen::VectorXd> all = f.allInputs(runtime);
+  if (spec.isUser()) return userReferenceOutputs(model, spec, all);
+  std::vector<Eigen::MatrixXd> out;
+  for (std::size_t k = 0; k < spec.outputs.size(); ++k) {
+    const OutputSpec& o = spec.outputs[k];
+    if (o.kind == OutputKind::Value) out.push_back(f.valueMatrix(referenceValue(model, spec, all)));
+    else if (o.kind == OutputKind::Jacobian) out.push_back(finiteDifferenceJacobian(model, spec, all, o.wrt));
+    else out.push_back(finiteDifferenceHessian(model, spec, all, f.hessianWeights(k, runtime), o.wrt));
+  }
+  return out;
+}
+
 std::vector<Comparison> runChecks(const Model& model, const SpecFunction& f, Backend backend, const CheckArgs& args) {
   const FunctionSpec& spec = f.spec();
-  const bool inverts_mass_matrix = spec.function == ModelFunction::Aba || spec.function == ModelFunction::Minv;
   const std::size_t n = spec.outputs.size();
   const bool against_interpreter = backend == Backend::Generated;
   std::vector<Comparison> rows;  // per output: against the reference, then the interpreter
   for (std::size_t k = 0; k < n; ++k) {
     const std::string& name = f.built().outputs[k].name;
-    switch (spec.outputs[k].kind) {
-      case OutputKind::Value:
-        rows.push_back(
-            {name, "reference (core/dynamics)", inverts_mass_matrix ? kInvertingValueTolerance : kValueTolerance});
-        break;
-      case OutputKind::Jacobian:
-        rows.push_back({name, "finite differences", kJacobianTolerance});
-        break;
-      case OutputKind::Hessian:
-        rows.push_back({name, "second finite differences", kHessianTolerance});
-        break;
-    }
-    if (against_interpreter)
-      rows.push_back({name, "interpreted", inverts_mass_matrix ? kInvertingBackendTolerance : kBackendTolerance});
+    rows.push_back(referenceComparison(spec, k, name));
+    if (against_interpreter) rows.push_back(backendComparison(spec, name));
   }
   const std::size_t per_output = against_interpreter ? 2 : 1;
   for (int s = 0; s < args.samples; ++s) {
     const std::uint64_t seed = args.seed + static_cast<std::uint64_t>(s);
     const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, spec, seed);
-    const std::vector<Eigen::VectorXd> all = f.allInputs(runtime);
     const std::vector<Eigen::MatrixXd> got = f.evaluate(backend, runtime);
+    const std::vector<Eigen::MatrixXd> expected = referenceOutputs(model, f, runtime);
     std::vector<Eigen::MatrixXd> interpreted;
     if (against_interpreter) interpreted = f.evaluate(Backend::Interpreted, runtime);
     for (std::size_t k = 0; k < n; ++k) {
-      const OutputSpec& o = spec.outputs[k];
-      Comparison& reference = rows[k * per_output];
-      if (o.kind == OutputKind::Value)
-        reference.add(got[k], f.valueMatrix(referenceValue(model, spec, all)), s, seed);
-      else if (o.kind == OutputKind::Jacobian)
-        reference.add(got[k], finiteDifferenceJacobian(model, spec, all, o.wrt), s, seed);
-      else
-        reference.add(got[k], finiteDifferenceHessian(model, spec, all, f.hessianWeights(k, runtime), o.wrt), s, seed);
+      rows[k * per_output].add(got[k], expected[k], s, seed);
       if (against_interpreter) rows[k * per_output + 1].add(got[k], interpreted[k], s, seed);
     }
   }
@@ -204,7 +231,10 @@ void addCheckCommand(CLI::App& app) {
       "in double (relative tolerance 1e-10; 1e-9 for aba and minv, which invert the mass matrix); Jacobians "
       "against central finite differences (1e-5); Hessians against second central differences (1e-4); the "
       "generated code against the interpreter (1e-11; 1e-9 for aba and minv: compiled code may fuse a*b + c into "
-      "one FMA instruction, rounded once). Relative errors are elementwise, relative to "
+      "one FMA instruction, rounded once). A user spec's outputs, by their names: values against the double "
+      "evaluation of the same expressions (1e-9), Jacobians, gradients and vector-Jacobian products against "
+      "central finite differences of it (1e-4), Hessians against second differences (1e-3), the generated code "
+      "against the interpreter (1e-9). Relative errors are elementwise, relative to "
       "max(|expected|, 1e-3 max|expected|, 1e-6).\n"
       "Exit status: 0 when every comparison passes, 2 when one or more fail, 1 on errors (bad spec, unknown "
       "frame, compile failure, ...).");

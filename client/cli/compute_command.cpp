@@ -1,9 +1,11 @@
 // `robodiff compute`: evaluate one dynamics function in double precision at one state:
 // its value straight from core/dynamics (the original output), or a spec's outputs
-// (value, Jacobians, Hessians) by one of the backends (function_backends.hpp).
+// (value, Jacobians, Hessians) by one of the backends (function_backends.hpp), or every
+// output of a user function, its inputs read by name (user_spec_output.hpp).
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -17,6 +19,7 @@
 #include "robodiff/functions/model_function.hpp"
 #include "spec_output.hpp"
 #include "state_json.hpp"
+#include "user_spec_output.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -28,7 +31,7 @@ nlohmann::json placementJson(const SE3<double>& m) {
 struct Options {
   RobotArgs robot;
   std::string function, spec, frame, reference = "LOCAL_WORLD_ALIGNED", format = "json";
-  std::string backend = "reference";
+  std::string backend;  // empty: reference, or interpreted for a user spec
   bool derivatives = false;
   StateArgs state;
 };
@@ -108,7 +111,7 @@ void runDirect(const Options& o) {
               << ", nv = " << model.nv << ", " << source << ")\n";
     table.print(std::cout);
   } else {
-    nlohmann::json out = {{"function", fn}, {"nq", model.nq}, {"nv", model.nv}, {"result", result}};
+    nlohmann::json out = {{"function", fn}, {"nq", model.nq}, {"nv", model.nv}, {"value", result}};
     if (fn == "jacobian") out["frame"] = o.frame, out["reference"] = toString(reference);
     std::cout << out.dump() << "\n";
   }
@@ -135,8 +138,8 @@ FunctionSpec specForFunction(const Options& o, const Model& model) {
 
 // The spec of --spec or --function, with the outputs compute prints: only the value
 // without --derivatives, every output (and the value first if missing) with it.
-FunctionSpec computedSpec(const Options& o, const Model& model) {
-  FunctionSpec spec = o.spec.empty() ? specForFunction(o, model) : loadFunctionSpec(o.spec);
+FunctionSpec computedSpec(const Options& o, const Model& model, const std::optional<FunctionSpec>& loaded) {
+  FunctionSpec spec = loaded ? *loaded : specForFunction(o, model);
   const auto is_value = [](const OutputSpec& out) { return out.kind == OutputKind::Value; };
   if (!o.derivatives)
     spec.outputs = {OutputSpec{}};
@@ -170,28 +173,74 @@ std::vector<OutputBlockInfo> blockInfos(const SpecFunction& f) {
   return blocks;
 }
 
+// --backend, or the default: interpreted for a user spec (exact derivatives, nothing
+// compiled), else reference.
+std::string backendName(const Options& o, bool user) {
+  if (!o.backend.empty()) return o.backend;
+  return user ? "interpreted" : "reference";
+}
+
 // A spec's outputs (--spec, --derivatives or --backend) by the chosen backend.
-void runSpec(const Options& o) {
+void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
   const Model model = loadRobot(o.robot);
-  const FunctionSpec spec = computedSpec(o, model);
+  const FunctionSpec spec = computedSpec(o, model, loaded);
   const std::string label = o.function.empty() ? toString(spec.function) : o.function;
   const std::vector<Eigen::VectorXd> runtime = runtimeInputs(o, model, spec, label);
-  const Backend backend = parseBackend(o.backend);
+  const Backend backend = parseBackend(backendName(o, false));
   const SpecFunction f(model, spec, {backend});
   const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
   if (o.format == "table") {
     std::cout << label << " of " << (model.name.empty() ? o.robot.urdf : model.name) << " (nq = " << model.nq
-              << ", nv = " << model.nv << ", " << o.backend << " backend)\n";
+              << ", nv = " << model.nv << ", " << toString(backend) << " backend)\n";
     printSpecTables(std::cout, model, spec, blockInfos(f), out);
     return;
   }
-  std::cout << specOutputsJson(label, o.backend, model, spec, blockInfos(f), out).dump() << "\n";
+  std::cout << specOutputsJson(label, toString(backend), model, spec, blockInfos(f), out).dump() << "\n";
+}
+
+// What the reference backend is for a user function, said wherever its numbers are printed.
+constexpr const char* kUserReferenceValues = "double evaluation of the expressions";
+constexpr const char* kUserReferenceDerivatives = "central finite differences (approximate)";
+
+// The variable inputs of a user spec's built function, as read by name.
+std::vector<NamedInput> userInputs(const SpecFunction& f) {
+  std::vector<std::pair<std::string, int>> blocks;
+  for (const codegen::InputBlock& b : f.definition().inputs) blocks.emplace_back(b.name, static_cast<int>(b.size));
+  return userNamedInputs(f.spec(), blocks);
+}
+
+// A user spec: every output by the backend, the inputs read by name.
+void runUser(const Options& o, const FunctionSpec& spec) {
+  if (!o.frame.empty()) throw std::invalid_argument("--frame does not apply to a user spec: its expressions name frames");
+  const Model model = loadRobot(o.robot);
+  const Backend backend = parseBackend(backendName(o, true));
+  const SpecFunction f(model, spec, {backend});
+  const std::vector<NamedInput> inputs = userInputs(f);
+  const auto [runtime, source] = loadUserInputs(o.state, model, spec, inputs);
+  const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
+  const bool reference = backend == Backend::Reference;
+  if (o.format == "table") {
+    std::cout << spec.functionName() << " of " << (model.name.empty() ? o.robot.urdf : model.name)
+              << " (nq = " << model.nq << ", nv = " << model.nv << ", " << source << ", " << toString(backend)
+              << " backend)\n";
+    if (reference)
+      std::cout << "values by " << kUserReferenceValues << ", derivatives by " << kUserReferenceDerivatives << "\n";
+    printUserTables(std::cout, model, spec, inputs, out);
+    return;
+  }
+  nlohmann::json meta = {{"function", spec.functionName()}, {"backend", toString(backend)},
+                         {"nq", model.nq}, {"nv", model.nv}};
+  if (reference) meta["method"] = {{"values", kUserReferenceValues}, {"derivatives", kUserReferenceDerivatives}};
+  std::cout << userOutputsJson(std::move(meta), spec, out).dump() << "\n";
 }
 
 void run(const Options& o) {
   if (o.function.empty() == o.spec.empty()) throw std::invalid_argument("give one of --function NAME and --spec FILE");
-  if (o.spec.empty() && !o.derivatives && o.backend == "reference") runDirect(o);
-  else runSpec(o);
+  std::optional<FunctionSpec> spec;
+  if (!o.spec.empty()) spec = loadFunctionSpec(o.spec);
+  if (spec && spec->isUser()) runUser(o, *spec);
+  else if (!spec && !o.derivatives && backendName(o, false) == "reference") runDirect(o);
+  else runSpec(o, spec);
 }
 
 }  // namespace
@@ -212,22 +261,30 @@ void addComputeCommand(CLI::App& app) {
       ->check(CLI::IsMember({"LOCAL", "WORLD", "LOCAL_WORLD_ALIGNED"}));
   addStateOptions(*cmd, options->state);
   cmd->add_option("--backend", options->backend,
-                  "reference (default): the value from core/dynamics in double; derivatives from the builder's "
-                  "expression graph evaluated node by node (symbolic::Graph::evaluate: slow, but no code "
-                  "generation or interpreter involved). generated: C code generated and compiled into a "
-                  "temporary directory (removed afterwards), loaded and run. interpreted: the same graph run by "
-                  "the interpreter, nothing compiled")
+                  "reference (default, except for a user spec): the value from core/dynamics in double; "
+                  "derivatives from the builder's expression graph evaluated node by node "
+                  "(symbolic::Graph::evaluate: slow, but no code generation or interpreter involved); for a user "
+                  "spec, the values from the double evaluation of its expressions and the derivatives by central "
+                  "finite differences (approximate). generated: C code generated and compiled into a temporary "
+                  "directory (removed afterwards), loaded and run. interpreted (the default for a user spec): the "
+                  "same graph run by the interpreter, nothing compiled")
       ->check(CLI::IsMember(backendNames()));
   cmd->add_flag("--derivatives", options->derivatives,
                 "Also print derivatives: with --function, the Jacobian w.r.t. all the function's inputs "
                 "(\"jacobian\", [m][n], columns in input order, q in the tangent space); with --spec, every output "
-                "the spec asks for, Hessians (full symmetric [n][n]) included. Without it only the value is printed");
+                "the spec asks for, Hessians (full symmetric [n][n]) included. Without it only the value is printed. A user "
+                "spec's outputs are always all printed");
   cmd->add_option("--format", options->format, "json (default) or table")->check(CLI::IsMember({"json", "table"}));
   cmd->footer(
-      "Output (json): {\"function\", \"nq\", \"nv\", \"result\"} for --function alone (reference backend, no "
+      "Output (json): {\"function\", \"nq\", \"nv\", \"value\"} for --function alone (reference backend, no "
       "--derivatives); otherwise {\"function\", \"backend\", \"nq\", \"nv\", \"value\" (a vector, or [rows][cols]), "
       "\"jacobian\", \"hessian\", ...}: one key per output block of the function, named as in the generated "
-      "library (several Jacobians: jacobian_q, jacobian_v, ...).");
+      "library (several Jacobians: jacobian_q, jacobian_v, ...).\n"
+      "A user spec (\"inputs\" / \"define\" / \"outputs\") reads its variable inputs by name from --state "
+      "({\"q\": [...], \"u\": [...], ...}) and prints {\"function\", \"backend\", \"nq\", \"nv\"} and one key per "
+      "output, its name: a value with one column, a gradient and a vjp as arrays, anything else [rows][cols] "
+      "(sparse blocks expanded, a sparse Hessian mirrored to the full matrix). With the reference backend, "
+      "\"method\" says the derivatives are central finite differences.");
   cmd->callback([options] { run(*options); });
 }
 

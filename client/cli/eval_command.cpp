@@ -13,6 +13,7 @@
 #include "service_helpers.hpp"
 #include "spec_output.hpp"
 #include "state_json.hpp"
+#include "user_spec_output.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -54,6 +55,36 @@ std::vector<double> inputsFor(const EvalArgs& args, const Model& model, const rp
   return inputs;
 }
 
+// The server function's input blocks: name and size.
+std::vector<std::pair<std::string, int>> inputBlocks(const rpc::GetFunctionReply& function) {
+  std::vector<std::pair<std::string, int>> blocks;
+  for (const rpc::InputBlock& b : function.inputs) blocks.emplace_back(b.name, static_cast<int>(b.size));
+  return blocks;
+}
+
+// A user function's input blocks, read by name from the state (or drawn at random).
+std::vector<double> userInputsFor(const EvalArgs& args, const Model& model, const rpc::GetFunctionReply& function,
+                                  const FunctionSpec& spec) {
+  const std::vector<std::pair<std::string, int>> blocks = inputBlocks(function);
+  const auto [runtime, source] = loadUserInputs(args.state, model, spec, userNamedInputs(spec, blocks));
+  std::vector<double> inputs;
+  for (std::size_t b = 0; b < runtime.size(); ++b) {
+    if (runtime[b].size() != blocks.at(b).second)
+      throw std::runtime_error("the server's function takes " + std::to_string(blocks[b].second) +
+                               " numbers for input '" + blocks[b].first + "', " + source + " has " +
+                               std::to_string(runtime[b].size()));
+    inputs.insert(inputs.end(), runtime[b].data(), runtime[b].data() + runtime[b].size());
+  }
+  return inputs;
+}
+
+// What eval prints besides the outputs.
+nlohmann::json serviceMeta(const ServiceConnection& c, const rpc::LoadModelReply& loaded,
+                           const rpc::GetFunctionReply& function) {
+  return {{"transport", c.transport}, {"server", c.address}, {"model_id", loaded.model_id},
+          {"function_id", function.function_id}};
+}
+
 void eval(const EvalArgs& args) {
   const std::string urdf = readTextFile(args.robot.urdf, "--urdf");
   const std::string spec_text = readTextFile(args.spec, "--spec");
@@ -67,9 +98,10 @@ void eval(const EvalArgs& args) {
   // The server judges the spec first: its status and message are what a client would get.
   const rpc::GetFunctionReply function = getFunctionOnServer(c, loaded.model_id, spec_text, true);
   const FunctionSpec spec = parseFunctionSpec(spec_text, args.spec);
-  const std::string label = toString(spec.function);
+  const std::string label = spec.functionName();
 
-  const std::vector<double> inputs = inputsFor(args, model, function, label);
+  const std::vector<double> inputs =
+      spec.isUser() ? userInputsFor(args, model, function, spec) : inputsFor(args, model, function, label);
   std::vector<double> outputs(rpc::outputCount(function));
   check(c->evaluate(function.function_id, inputs, outputs, c.call()), "Evaluate");
 
@@ -88,14 +120,19 @@ void eval(const EvalArgs& args) {
   if (args.format == "table") {
     std::cout << label << " of " << (model.name.empty() ? args.robot.urdf : model.name) << " (nq = " << model.nq
               << ", nv = " << model.nv << ", evaluated by the server over " << c.transport << ")\n";
-    printSpecTables(std::cout, model, spec, blocks, out);
+    if (spec.isUser()) printUserTables(std::cout, model, spec, userNamedInputs(spec, inputBlocks(function)), out);
+    else printSpecTables(std::cout, model, spec, blocks, out);
     return;
   }
-  nlohmann::json j = specOutputsJson(label, "service", model, spec, blocks, out);
-  j["transport"] = c.transport;
-  j["server"] = c.address;
-  j["model_id"] = loaded.model_id;
-  j["function_id"] = function.function_id;
+  nlohmann::json j;
+  if (spec.isUser()) {
+    j = {{"function", label}, {"backend", "service"}, {"nq", model.nq}, {"nv", model.nv}};
+    j.update(serviceMeta(c, loaded, function));
+    j = userOutputsJson(std::move(j), spec, out);
+  } else {
+    j = specOutputsJson(label, "service", model, spec, blocks, out);
+    j.update(serviceMeta(c, loaded, function));
+  }
   std::cout << j.dump() << "\n";
 }
 
@@ -114,8 +151,9 @@ void addEvalCommand(CLI::App& app) {
   cmd->footer(std::string("Output (json): the shapes of `robodiff compute --spec SPEC --backend generated "
                           "--derivatives`: {\"function\", \"backend\": \"service\", \"nq\", \"nv\", \"value\", "
                           "\"jacobian\" [m][n], \"hessian\" [n][n], ...: one key per output block of the spec, named "
-                          "as in the library, sparse blocks expanded}, plus \"transport\", \"server\", \"model_id\" and "
-                          "\"function_id\". The spec is sent as it is: its outputs are printed (compute adds the "
+                          "as in the library, sparse blocks expanded; a user spec: one key per output, its name, "
+                          "and its inputs read by name from --state}, plus \"transport\", \"server\", \"model_id\" "
+                          "and \"function_id\". The spec is sent as it is: its outputs are printed (compute adds the "
                           "value when a spec lacks it). Waits until the server can evaluate the function (its "
                           "interpreter serves it while the library compiles).\n") +
               kServiceExitHelp);

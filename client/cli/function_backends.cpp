@@ -143,6 +143,9 @@ std::vector<Eigen::MatrixXd> SpecFunction::evaluateReference(const std::vector<E
   if (inputs.size() != definition().inputCount())
     throw std::invalid_argument(definition().name + " takes " + std::to_string(definition().inputCount()) +
                                 " input numbers, " + std::to_string(inputs.size()) + " given");
+  // A user function's reference is the double evaluation of its expressions and central
+  // differences of it, already in the blocks' layout.
+  if (spec_.isUser()) return userReferenceOutputs(model_, spec_, allInputs(runtime));
   std::vector<Eigen::MatrixXd> out;
   for (std::size_t k = 0; k < spec_.outputs.size(); ++k) {
     const OutputKind kind = spec_.outputs[k].kind;

@@ -1,7 +1,9 @@
 // A spec's function, built once and evaluated in the ways the CLI offers:
 // - reference: the value from core/dynamics in double (referenceValue), derivatives
 //   from the builder's graph evaluated node by node (symbolic::Graph::evaluate), no
-//   code generation or interpreter involved;
+//   code generation or interpreter involved; for a user function, the double
+//   evaluation of its expressions and central finite differences of it
+//   (userReferenceOutputs: the derivatives are approximations);
 // - interpreted: the builder's graph run by codegen::Interpreter;
 // - generated: C code generated and compiled into a temporary directory, loaded, run.
 #pragma once

@@ -18,7 +18,8 @@ CLI::Option* addSpecOption(CLI::App& cmd, std::string& path, bool required) {
   CLI::Option* option = cmd.add_option("--spec", path,
                                        "Function spec (JSON, schema/function-spec.schema.json; examples in "
                                        "examples/specs/): the function, its variable and fixed inputs, its outputs "
-                                       "(value, Jacobians, weighted Hessians) and build options")
+                                       "(value, Jacobians, weighted Hessians) and build options; or a user function "
+                                       "(inputs, define, outputs: docs/function-language.md)")
                             ->type_name("SPEC.json");
   if (required) option->required();
   return option;

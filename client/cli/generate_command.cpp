@@ -37,7 +37,7 @@ void printSummary(const FunctionSpec& spec, const GeneratedFunctionLibrary& g, s
   for (const BuiltOutput& o : b.outputs) outputs += (outputs.empty() ? "" : ", ") + shape(o);
   std::string flags;
   for (const std::string& f : g.compile.flags) flags += " " + f;
-  out << "function    " << b.definition.name << " (" << toString(spec.function) << "): " << outputs << "\n"
+  out << "function    " << b.definition.name << " (" << spec.functionName() << "): " << outputs << "\n"
       << "method      " << b.method << "\n"
       << "operations  " << g.info.operations << " in " << g.info.parts << (g.info.parts == 1 ? " part" : " parts")
       << "\n"
@@ -76,7 +76,8 @@ void addGenerateCommand(CLI::App& app) {
       ->required()
       ->type_name("DIR");
   cmd->add_option("--name", args->name,
-                  "C name of the function and of the files (default: the spec's function, e.g. rnea)")
+                  "C name of the function and of the files (default: the spec's function, e.g. rnea, or a user "
+                  "spec's \"name\")")
       ->type_name("NAME");
   cmd->add_option("--compiler", args->compiler, "C compiler to run, a path or a name in PATH (default: $CC, else cc)")
       ->type_name("CC");

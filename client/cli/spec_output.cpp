@@ -30,7 +30,8 @@ std::vector<std::string> velocityLabels(const Model& model) {
 void addStateOptions(CLI::App& cmd, StateArgs& args) {
   auto* state = cmd.add_option("--state", args.path,
                                "State JSON {\"q\": [...], \"v\": [...], \"a\": [...], \"tau\": [...]}; a spec's "
-                               "Hessian with runtime weights reads \"weights\": [...] (one per value entry)");
+                               "Hessian with runtime weights reads \"weights\": [...] (one per value entry); a user spec "
+                               "reads its variable inputs by name");
   auto* random = cmd.add_option("--random-state", args.seed,
                                 "Use a random state (and random Hessian weights) drawn with this seed");
   state->excludes(random);

@@ -27,9 +27,8 @@ Eigen::VectorXd toVector(const nlohmann::json& value, const std::string& path, c
   return out;
 }
 
-}  // namespace
-
-State readStateFile(const std::string& path) {
+// The state file as a JSON object; errors name the file.
+nlohmann::json readStateObject(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path + ": cannot open state file");
   nlohmann::json j;
@@ -39,6 +38,22 @@ State readStateFile(const std::string& path) {
     throw std::invalid_argument(path + ": not valid JSON: " + e.what());
   }
   if (!j.is_object()) throw std::invalid_argument(path + ": expected an object {\"q\": [...], \"v\": [...], ...}");
+  return j;
+}
+
+// "q (7 numbers), v (7 numbers), ..." for messages.
+std::string expectedInputs(const std::vector<NamedInput>& wanted) {
+  std::string text;
+  for (const NamedInput& in : wanted)
+    text += (text.empty() ? "" : ", ") + in.name + " (" + std::to_string(in.size) + " numbers" +
+            (in.configuration ? ", a configuration" : "") + ")";
+  return text;
+}
+
+}  // namespace
+
+State readStateFile(const std::string& path) {
+  const nlohmann::json j = readStateObject(path);
   State s;
   if (j.contains("q")) s.q = toVector(j["q"], path, "q");
   if (j.contains("v")) s.v = toVector(j["v"], path, "v");
@@ -76,19 +91,41 @@ const Eigen::VectorXd& require(const State& state, const Model& model, const std
       << (key == "q" ? "nq" : "nv") << " = " << expected;
     throw std::invalid_argument(s.str());
   }
-  if (key == "q") {
-    for (const Joint& j : model.joints) {
-      if (j.type != JointType::FreeFlyer) continue;
-      double norm = value->segment<4>(j.idx_q + 3).norm();
-      if (std::abs(norm - 1.0) > 1e-6) {
-        std::ostringstream s;
-        s << source << ": \"q\"[" << j.idx_q + 3 << ".." << j.idx_q + 6 << "] (quaternion x y z w of '" << j.name
-          << "') has norm " << norm << ", expected a unit quaternion";
-        throw std::invalid_argument(s.str());
-      }
+  if (key == "q") checkUnitQuaternions(*value, model, key, source);
+  return *value;
+}
+
+void checkUnitQuaternions(const Eigen::VectorXd& q, const Model& model, const std::string& key,
+                          const std::string& source) {
+  for (const Joint& j : model.joints) {
+    if (j.type != JointType::FreeFlyer) continue;
+    const double norm = q.segment<4>(j.idx_q + 3).norm();
+    if (std::abs(norm - 1.0) > 1e-6) {
+      std::ostringstream s;
+      s << source << ": \"" << key << "\"[" << j.idx_q + 3 << ".." << j.idx_q + 6 << "] (quaternion x y z w of '"
+        << j.name << "') has norm " << norm << ", expected a unit quaternion";
+      throw std::invalid_argument(s.str());
     }
   }
-  return *value;
+}
+
+std::vector<Eigen::VectorXd> readNamedInputs(const std::string& path, const Model& model,
+                                             const std::vector<NamedInput>& wanted) {
+  const nlohmann::json j = readStateObject(path);
+  std::vector<Eigen::VectorXd> out;
+  for (const NamedInput& in : wanted) {
+    if (!j.contains(in.name))
+      throw std::invalid_argument(path + ": no \"" + in.name + "\"; the function's inputs are " +
+                                  expectedInputs(wanted));
+    Eigen::VectorXd value = toVector(j[in.name], path, in.name);
+    if (value.size() != in.size)
+      throw std::invalid_argument(path + ": \"" + in.name + "\" has " + std::to_string(value.size()) + " numbers, " +
+                                  std::to_string(in.size) + " expected; the function's inputs are " +
+                                  expectedInputs(wanted));
+    if (in.configuration) checkUnitQuaternions(value, model, in.name, path);
+    out.push_back(std::move(value));
+  }
+  return out;
 }
 
 const Eigen::VectorXd& requireWeights(const State& state, int count, const std::string& what,

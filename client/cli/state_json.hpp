@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -33,5 +34,23 @@ const Eigen::VectorXd& require(const State& state, const Model& model, const std
 // The weights of the state, checked to have `count` entries (the size of the value).
 const Eigen::VectorXd& requireWeights(const State& state, int count, const std::string& what,
                                       const std::string& source);
+
+// Throws when a free-flyer's quaternion in configuration `q` (named `key`) is not unit.
+void checkUnitQuaternions(const Eigen::VectorXd& q, const Model& model, const std::string& key,
+                          const std::string& source);
+
+// An input a user function reads by name ({"q": [...], "u": [...], ...}): its size and
+// whether it is a configuration (its free-flyer quaternions must be unit).
+struct NamedInput {
+  std::string name;
+  int size = 0;
+  bool configuration = false;
+};
+
+// The inputs `wanted`, in order, from the state file at `path`; a missing or wrongly
+// sized input is an error naming it and listing every expected input with its size.
+// Keys not wanted are ignored.
+std::vector<Eigen::VectorXd> readNamedInputs(const std::string& path, const Model& model,
+                                             const std::vector<NamedInput>& wanted);
 
 }  // namespace robodiff::cli

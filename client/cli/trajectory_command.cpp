@@ -91,7 +91,7 @@ void printSummary(const batch::TrajectoryReport& r, const batch::BatchFunction& 
                   const Model& model, unsigned threads) {
   std::string outputs;
   for (const batch::BlockLayout& block : f.outputs()) outputs += (outputs.empty() ? "" : ", ") + shape(block);
-  std::cout << "trajectory: " << grouped(static_cast<double>(r.knots)) << " knots of " << toString(spec.function)
+  std::cout << "trajectory: " << grouped(static_cast<double>(r.knots)) << " knots of " << spec.functionName()
             << " (" << outputs << ") for " << (model.name.empty() ? "the robot" : model.name) << ", "
             << batch::toString(f.backend()) << ", " << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
   std::cout << "  read      " << fixed(r.read_seconds, 3) << " s  " << r.data.string() << "\n";
@@ -116,7 +116,7 @@ nlohmann::json reportJson(const batch::TrajectoryReport& r, const batch::BatchFu
   for (const batch::BlockLayout& block : f.outputs())
     outputs.push_back({{"name", block.name}, {"rows", block.rows}, {"cols", block.cols},
                        {"layout", block.sparse ? "csr" : "dense"}, {"size", block.size}});
-  return {{"function", toString(spec.function)},
+  return {{"function", spec.functionName()},
           {"model", model.name},
           {"backend", batch::toString(f.backend())},
           {"threads", threads},
@@ -151,7 +151,7 @@ void runTrajectory(const TrajectoryArgs& args) {
   const bool terminal = !args.json && ::isatty(STDERR_FILENO);
   options.on_progress = [&](const std::string& what) {
     if (what == "building" && !args.json)
-      std::cerr << "building " << toString(spec.function) << " for " << model.name << " into the cache "
+      std::cerr << "building " << spec.functionName() << " for " << model.name << " into the cache "
                 << options.cache_dir.string() << " ...\n";
   };
   const batch::BatchFunction function = batch::BatchFunction::open(model, urdf_text, args.robot.floating_base, spec, options);
@@ -194,12 +194,14 @@ void addTrajectoryCommand(CLI::App& app) {
   addSpecOption(*cmd, args->spec, true);
   cmd->add_option("--data", args->data,
                   "The trajectory: CSV with a header row (t, q_<joint>, v_<joint>, a_<joint>, tau_<joint>, or "
-                  "<block>_<index>), or JSON ({\"t\": [...], \"q\": [[...], ...], ...} or [{\"t\": ..., \"q\": [...]}, "
-                  "...]); columns the function does not use are ignored")
+                  "<block>_<index>; a user spec's inputs by their names: u_<joint>, target_0, ...), or JSON ({\"t\": "
+                  "[...], \"q\": [[...], ...], ...} or [{\"t\": ..., \"q\": [...]}, ...]); columns the function does not "
+                  "use are ignored")
       ->required()
       ->type_name("TRAJ.csv|TRAJ.json");
   cmd->add_option("--out", args->out,
-                  "Where the outputs go, one row per knot: .csv (t, value_<r>, jacobian_<r>_<c>, ...) or .rdb/.bin "
+                  "Where the outputs go, one row per knot: .csv (t, value_<r>, jacobian_<r>_<c>, ...; a user spec's "
+                  "outputs by their names) or .rdb/.bin "
                   "(a JSON header, then float64 little-endian rows); written atomically")
       ->required()
       ->type_name("OUT.csv|OUT.rdb");

@@ -41,7 +41,7 @@ std::string robotName(const workers::BuildTarget& t) {
 
 std::string functionName(const workers::BuildTarget& t) {
   try {
-    return toString(loadFunctionSpec(t.spec_path).function);
+    return loadFunctionSpec(t.spec_path).functionName();
   } catch (const std::exception&) {
     return std::filesystem::path(t.spec_path).stem().string();
   }

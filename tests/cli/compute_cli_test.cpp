@@ -58,7 +58,7 @@ TEST(ComputeCli, AgreesWithGoldenValues) {
       EXPECT_EQ(j["function"], fn);
       EXPECT_EQ(j["nq"], g.nq);
       EXPECT_EQ(j["nv"], g.nv);
-      return j["result"];
+      return j["value"];
     };
     EXPECT_TRUE(matricesAgree(matrixOf(run("rnea")), s.tau));
     EXPECT_TRUE(matricesAgree(matrixOf(run("aba")), s.ddq));
@@ -96,10 +96,10 @@ TEST(ComputeCli, MakeRobotThenComputeAgreesWithTheLibrary) {
                                               .dump());
   testing::ProcessResult r = runCommand(compute(urdf, "rnea", state, "--floating-base"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(matricesAgree(matrixOf(nlohmann::json::parse(r.out)["result"]), rnea(model, data, q, v, a), 1e-14));
+  EXPECT_TRUE(matricesAgree(matrixOf(nlohmann::json::parse(r.out)["value"]), rnea(model, data, q, v, a), 1e-14));
   r = runCommand(compute(urdf, "com", state, "--floating-base"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  nlohmann::json com = nlohmann::json::parse(r.out)["result"];
+  nlohmann::json com = nlohmann::json::parse(r.out)["value"];
   EXPECT_TRUE(matricesAgree(matrixOf(com["com"]), centerOfMass(model, data, q), 1e-14));
   EXPECT_NEAR(com["mass"].get<double>(), data.mass, 1e-12);
   // The table format prints one labelled row per joint.

@@ -118,5 +118,48 @@ TEST_F(TrajectoryCliTest, AMissingColumnAndABadExtensionAreErrors) {
   EXPECT_NE(r.err.find("out.xlsx: the extension says no output format"), std::string::npos) << r.err;
 }
 
+// A user spec: input columns by input name (q_<joint>, u_<joint>, target_<i>), output
+// columns by output name (q_next_<r>, dv_next_<r>_<c>, cost_0, grad_<r>).
+TEST_F(TrajectoryCliTest, UserSpecColumnsByInputAndOutputName) {
+  const char* text = R"js({"name": "step",
+    "inputs": {"q": "configuration", "v": "nv", "u": "nv", "target": 3, "dt": {"fixed": [0.01]}},
+    "define": {"v_next": "v + dt * aba(q, v, u)", "cost": "sumsq(frame_position(q, 'tool') - target)"},
+    "outputs": [
+      {"name": "q_next", "kind": "value", "of": "integrate(q, dt * v_next)"},
+      {"name": "dv_next", "kind": "jacobian", "of": "v_next", "wrt": ["u"], "layout": "sparse"},
+      {"name": "cost", "kind": "value", "of": "cost"},
+      {"name": "grad", "kind": "gradient", "of": "cost", "wrt": ["q", "target"]}]})js";
+  const FunctionSpec user = parseFunctionSpec(text);
+  const fs::path spec = tmp_.file("step.json", text);
+  const batch::BatchFunction f = arm_.open(user, batch::Backend::Interpreted, tmp_ / "unused-cache");
+  const fs::path data = tmp_.file("step.csv", trajectoryCsv(arm_.model, f, randomKnots(arm_.model, user, 20)));
+  const std::string header = readFile(data).substr(0, readFile(data).find('\n'));
+  for (const std::string& column : {"q_" + arm_.model.joints[0].name, "u_" + arm_.model.joints[6].name, std::string("target_2")})
+    EXPECT_NE(header.find("," + column), std::string::npos) << header;
+
+  const fs::path out = tmp_ / "step_out.csv";
+  const ProcessResult r =
+      runCommand(cli("trajectory --urdf " + shellQuote(arm_.urdf_path.string()) + " --spec " + shellQuote(spec.string()) +
+                     " --data " + shellQuote(data.string()) + " --out " + shellQuote(out.string()) +
+                     " --backend interpreted --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json summary = json::parse(r.out);
+  EXPECT_EQ(summary["function"], "step");
+  EXPECT_EQ(summary["knots"], 20);
+  EXPECT_EQ(summary["ignored_columns"], json::array({"note"}));
+
+  const batch::CsvTable csv = batch::CsvTable::readFile(out);
+  const std::vector<std::string> want_header = {"t", "q_next_0"};
+  EXPECT_EQ(std::vector<std::string>(csv.header().begin(), csv.header().begin() + 2), want_header);
+  for (const char* column : {"q_next_6", "dv_next_6_6", "cost_0", "grad_0", "grad_9"})
+    EXPECT_TRUE(csv.column(column)) << column;
+  const batch::TrajectoryOutput want =
+      batch::evaluateTrajectory(f, batch::readTrajectoryFile(data, arm_.model, f.inputs(), batch::configurationInputs(user)))
+          .output;
+  ASSERT_EQ(csv.rows(), 20u);
+  for (std::size_t k = 0; k < csv.rows(); ++k)
+    for (std::size_t i = 0; i < want.output_count; ++i) ASSERT_EQ(csv.number(k, i + 1), want.knot(k)[i]) << k << " " << i;
+}
+
 }  // namespace
 }  // namespace robodiff::testing

@@ -65,15 +65,18 @@ inline std::vector<std::vector<Eigen::VectorXd>> randomKnots(const Model& model,
   return states;
 }
 
-// A CSV with t and the blocks' columns by joint name (or by index with `by_index`), one
-// row per state; `extra` columns with text are added to show that unused columns are ignored.
+// A CSV with t and the blocks' columns by joint name (or by index with `by_index`, and
+// for blocks that are not per joint), one row per state; `extra` columns with text are
+// added to show that unused columns are ignored.
 inline std::string trajectoryCsv(const Model& model, const batch::BatchFunction& f,
                                  const std::vector<std::vector<Eigen::VectorXd>>& states, bool by_index = false) {
   std::ostringstream csv;
   csv << "t";
-  for (const batch::BlockLayout& block : f.inputs())
-    for (const std::string& name : by_index ? batch::indexColumns(block) : batch::jointColumns(model, block))
-      csv << "," << name;
+  for (const batch::BlockLayout& block : f.inputs()) {
+    std::vector<std::string> names = by_index ? batch::indexColumns(block) : batch::jointColumns(model, block);
+    if (names.empty()) names = batch::indexColumns(block);
+    for (const std::string& name : names) csv << "," << name;
+  }
   csv << ",note\n";
   for (std::size_t k = 0; k < states.size(); ++k) {
     csv << shortest(0.01 * static_cast<double>(k));

@@ -191,6 +191,38 @@ TEST(TrajectoryTableFloatingBase, NamesTheBaseCoordinatesAndChecksTheQuaternion)
             "base.csv:3: columns q_root_joint_qx .. q_root_joint_qw: the quaternion has norm 0.5, not 1");
 }
 
+// A user function's configuration inputs, whatever their names, are read as q is: by
+// joint coordinate (the base's x .. qw), the quaternion checked.
+TEST(TrajectoryTableUserFunction, ConfigurationInputsByTheirOwnNames) {
+  Robot humanoid("humanoid", true);
+  const Model& model = humanoid.model;
+  const FunctionSpec spec = parseFunctionSpec(R"({"inputs": {"q0": "configuration", "q1": "configuration", "w": "nv"},
+      "outputs": [{"name": "d", "kind": "value", "of": "difference(q0, q1) + w"}]})");
+  const std::vector<std::string> configurations = batch::configurationInputs(spec);
+  EXPECT_EQ(configurations, (std::vector<std::string>{"q0", "q1"}));
+  EXPECT_EQ(batch::configurationInputs(parseFunctionSpec(kRneaJacobian)), std::vector<std::string>{"q"});
+
+  std::vector<BlockLayout> layout = blocks(model.nq, model.nv, {"q", "q", "w"});
+  layout[0].name = "q0", layout[1].name = "q1";
+  std::string h;
+  for (const BlockLayout& block : layout)
+    for (const std::string& name : batch::jointColumns(model, block, configurations)) h += (h.empty() ? "" : ",") + name;
+  EXPECT_NE(h.find("q1_root_joint_qw,q1_" + model.joints[1].name), std::string::npos) << h;
+  EXPECT_NE(h.find("w_root_joint_wz"), std::string::npos) << h;
+  auto knot = [&](double qw) {
+    std::string line = "0,0,1,0,0,0,1";
+    for (int i = 7; i < model.nq; ++i) line += ",0.1";
+    line += ",0,0,1,0,0,0," + shortest(qw);
+    for (int i = 7; i < model.nq + model.nv; ++i) line += ",0.2";
+    return line + "\n";
+  };
+  const TrajectoryTable table = batch::parseTrajectoryCsv(h + "\n" + knot(1.0), "two.csv", model, layout, configurations);
+  EXPECT_EQ(table.inputs[static_cast<std::size_t>(model.nq) + 6], 1.0);
+  EXPECT_EQ(table.inputs.back(), 0.2);
+  EXPECT_EQ(errorOf([&] { batch::parseTrajectoryCsv(h + "\n" + knot(0.5), "two.csv", model, layout, configurations); }),
+            "two.csv:2: columns q1_root_joint_qx .. q1_root_joint_qw: the quaternion has norm 0.5, not 1");
+}
+
 TEST_F(TrajectoryTableTest, JsonBlockMajorAndKnotMajorAgree) {
   nlohmann::json block_major = {{"t", {0.0, 0.5}}, {"q", nlohmann::json::array()}, {"v", nlohmann::json::array()},
                                 {"a", nlohmann::json::array()}, {"label", "walk"}};

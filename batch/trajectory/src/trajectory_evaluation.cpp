@@ -60,7 +60,7 @@ TrajectoryReport runTrajectoryJob(const BatchFunction& function, const Model& mo
   report.format = job.format ? *job.format : outputFormatFor(job.out);  // a bad extension fails before any work
 
   Clock::time_point start = Clock::now();
-  const TrajectoryTable table = readTrajectoryFile(job.data, model, function.inputs());
+  const TrajectoryTable table = readTrajectoryFile(job.data, model, function.inputs(), configurationInputs(spec));
   report.read_seconds = secondsSince(start);
   report.knots = table.knots;
   report.ignored_columns = table.ignored_columns;
@@ -76,7 +76,7 @@ TrajectoryReport runTrajectoryJob(const BatchFunction& function, const Model& mo
   }
 
   TrajectoryOutput& output = evaluation.output;
-  output.function = toString(spec.function);
+  output.function = spec.functionName();
   output.model = model.name;
   output.spec_json = normalizedSpecJson(spec);
   OutputWriteOptions write;

@@ -38,11 +38,19 @@ std::vector<std::size_t> quaternionOffsets(const Model& model) {
   return offsets;
 }
 
-// The norm of each quaternion in block q of one knot, checked; `where` names the knot.
-void checkQuaternions(const Model& model, const std::vector<BlockLayout>& inputs, const double* knot,
+// Whether `block` is a configuration of the model: named in `configurations`, nq entries.
+bool isConfiguration(const Model& model, const BlockLayout& block, const std::vector<std::string>& configurations) {
+  return block.size == static_cast<std::uint32_t>(model.nq) &&
+         std::find(configurations.begin(), configurations.end(), block.name) != configurations.end();
+}
+
+// The norm of each quaternion in the configuration blocks of one knot, checked; `where`
+// names the knot.
+void checkQuaternions(const Model& model, const std::vector<BlockLayout>& inputs,
+                      const std::vector<std::string>& configurations, const double* knot,
                       const std::vector<std::vector<std::string>>& block_columns, const std::string& where) {
   for (std::size_t b = 0; b < inputs.size(); ++b) {
-    if (inputs[b].name != "q" || inputs[b].size != static_cast<std::uint32_t>(model.nq)) continue;
+    if (!isConfiguration(model, inputs[b], configurations)) continue;
     for (std::size_t at : quaternionOffsets(model)) {
       const double* quat = knot + inputs[b].offset + at;
       const double norm = std::sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
@@ -69,10 +77,12 @@ std::string suffixedName(const std::string& block, const Joint& joint, int k, bo
 // Where each input block's entries come from in the CSV header, or an error naming what is missing.
 std::vector<std::vector<std::size_t>> mapColumns(const CsvTable& csv, const Model& model,
                                                  const std::vector<BlockLayout>& inputs,
+                                                 const std::vector<std::string>& configurations,
                                                  std::vector<std::vector<std::string>>& block_columns) {
   std::vector<std::vector<std::size_t>> columns;
   for (const BlockLayout& block : inputs) {
-    const std::vector<std::string> named = jointColumns(model, block), indexed = indexColumns(block);
+    const std::vector<std::string> named = jointColumns(model, block, configurations);
+    const std::vector<std::string> indexed = indexColumns(block);
     auto present = [&](const std::vector<std::string>& names) {
       std::size_t n = 0;
       for (const std::string& name : names) n += csv.column(name).has_value();
@@ -131,9 +141,18 @@ void readJsonBlock(const json& value, const BlockLayout& block, const std::strin
 
 }  // namespace
 
-std::vector<std::string> jointColumns(const Model& model, const BlockLayout& block) {
+std::vector<std::string> configurationInputs(const FunctionSpec& spec) {
+  if (!spec.isUser()) return {"q"};
   std::vector<std::string> names;
-  const bool configuration = block.name == "q" && block.size == static_cast<std::uint32_t>(model.nq);
+  for (const UserInput& in : spec.user->inputs)
+    if (in.kind == UserInput::Kind::Configuration) names.push_back(in.name);
+  return names;
+}
+
+std::vector<std::string> jointColumns(const Model& model, const BlockLayout& block,
+                                      const std::vector<std::string>& configurations) {
+  std::vector<std::string> names;
+  const bool configuration = isConfiguration(model, block, configurations);
   const bool tangent = !configuration && block.size == static_cast<std::uint32_t>(model.nv);
   if (!configuration && !tangent) return names;
   for (const Joint& joint : model.joints)
@@ -149,11 +168,13 @@ std::vector<std::string> indexColumns(const BlockLayout& block) {
 }
 
 TrajectoryTable parseTrajectoryCsv(std::string text, const std::string& source, const Model& model,
-                                   const std::vector<BlockLayout>& inputs) {
+                                   const std::vector<BlockLayout>& inputs,
+                                   const std::vector<std::string>& configurations) {
   const CsvTable csv = CsvTable::parse(std::move(text), source);
   TrajectoryTable table;
   table.source = source;
-  const std::vector<std::vector<std::size_t>> columns = mapColumns(csv, model, inputs, table.block_columns);
+  const std::vector<std::vector<std::size_t>> columns =
+      mapColumns(csv, model, inputs, configurations, table.block_columns);
   std::optional<std::size_t> time_column = csv.column("t");
   if (!time_column) time_column = csv.column("time");
 
@@ -178,7 +199,8 @@ TrajectoryTable parseTrajectoryCsv(std::string text, const std::string& source, 
       if (time_column) table.times[row] = csv.number(row, *time_column);
       for (std::size_t b = 0; b < inputs.size(); ++b)
         for (std::size_t i = 0; i < columns[b].size(); ++i) knot[inputs[b].offset + i] = csv.number(row, columns[b][i]);
-      if (has_quaternion) checkQuaternions(model, inputs, knot, table.block_columns, locationOf(source, csv.lineOf(row)));
+      if (has_quaternion)
+        checkQuaternions(model, inputs, configurations, knot, table.block_columns, locationOf(source, csv.lineOf(row)));
     }
   };
   const std::size_t threads = std::clamp<std::size_t>(csv.rows() / kRowsPerThread, 1, std::max(1u, std::thread::hardware_concurrency()));
@@ -200,7 +222,8 @@ TrajectoryTable parseTrajectoryCsv(std::string text, const std::string& source, 
 }
 
 TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& source, const Model& model,
-                                    const std::vector<BlockLayout>& inputs) {
+                                    const std::vector<BlockLayout>& inputs,
+                                    const std::vector<std::string>& configurations) {
   json root;
   try {
     root = json::parse(text);
@@ -254,7 +277,8 @@ TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& 
       double* knot = table.inputs.data() + k * table.input_count;
       for (std::size_t b = 0; b < inputs.size(); ++b)
         readJsonBlock((*blocks[b])[k], inputs[b], source, inputs[b].name + index, knot + inputs[b].offset);
-      checkQuaternions(model, inputs, knot, table.block_columns, source + ": knot " + std::to_string(k) + ": ");
+      checkQuaternions(model, inputs, configurations, knot, table.block_columns,
+                       source + ": knot " + std::to_string(k) + ": ");
     }
     for (const auto& [key, value] : root.items())
       if (!used.count(key)) table.ignored_columns.push_back(key);
@@ -281,7 +305,8 @@ TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& 
         if (!key) throw TrajectoryError(source + ": " + at + ": no \"t\" (knot 0 has one; every knot needs it then)");
         table.times[k] = jsonNumber(object[key], source, at + "." + key);
       }
-      checkQuaternions(model, inputs, knot, table.block_columns, source + ": knot " + std::to_string(k) + ": ");
+      checkQuaternions(model, inputs, configurations, knot, table.block_columns,
+                       source + ": knot " + std::to_string(k) + ": ");
       for (const auto& [key, value] : object.items())
         if (!used.count(key)) ignored.insert(key);
     }
@@ -294,10 +319,11 @@ TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& 
 }
 
 TrajectoryTable readTrajectoryFile(const std::filesystem::path& path, const Model& model,
-                                   const std::vector<BlockLayout>& inputs) {
+                                   const std::vector<BlockLayout>& inputs,
+                                   const std::vector<std::string>& configurations) {
   std::string text = readWholeFile(path);
-  if (path.extension() == ".json") return parseTrajectoryJson(text, path.string(), model, inputs);
-  return parseTrajectoryCsv(std::move(text), path.string(), model, inputs);
+  if (path.extension() == ".json") return parseTrajectoryJson(text, path.string(), model, inputs, configurations);
+  return parseTrajectoryCsv(std::move(text), path.string(), model, inputs, configurations);
 }
 
 }  // namespace robodiff::batch

@@ -8,8 +8,10 @@
 //   q_<joint>        block q, one column per joint coordinate, named by the model's joints.
 //                    A floating base (joint "root_joint") has seven:
 //                    q_root_joint_x, _y, _z (position), _qx, _qy, _qz, _qw (unit quaternion).
-//   v_<joint>, a_<joint>, tau_<joint>, weights_<joint>
-//                    any other input block of nv entries, one column per tangent
+//                    A user function's configuration inputs (q1, ...) are read the same
+//                    way under their own names (q1_<joint>, ...).
+//   v_<joint>, a_<joint>, tau_<joint>, weights_<joint>, u_<joint>
+//                    any other input block of nv entries (a user function's by its name), one column per tangent
 //                    coordinate; the floating base has six: <block>_root_joint_vx, _vy, _vz
 //                    (linear), _wx, _wy, _wz (angular), as `robodiff compute` labels them.
 //   <block>_<i>      any input block, by index i = 0 .. size-1 (q_0 .. q_6, weights_0 ...):
@@ -48,18 +50,27 @@ struct TrajectoryTable {
   std::vector<std::vector<std::string>> block_columns;
 };
 
+// The input blocks that are configurations (nq entries, a floating base's quaternion
+// checked): "q" for a model function, a user function's "configuration" inputs.
+std::vector<std::string> configurationInputs(const FunctionSpec& spec);
+
 // The columns an input block may be read from. `jointColumns` is empty for a block that
-// is not per joint (neither q with nq entries nor a block of nv entries).
-std::vector<std::string> jointColumns(const Model& model, const BlockLayout& block);
+// is not per joint (neither a configuration with nq entries nor a block of nv entries).
+std::vector<std::string> jointColumns(const Model& model, const BlockLayout& block,
+                                      const std::vector<std::string>& configurations = {"q"});
 std::vector<std::string> indexColumns(const BlockLayout& block);
 
 // Throws TrajectoryError ("source:line: ..." for CSV, "source: path: ..." for JSON).
+// `configurations` names the configuration blocks (configurationInputs).
 TrajectoryTable parseTrajectoryCsv(std::string text, const std::string& source, const Model& model,
-                                   const std::vector<BlockLayout>& inputs);
+                                   const std::vector<BlockLayout>& inputs,
+                                   const std::vector<std::string>& configurations = {"q"});
 TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& source, const Model& model,
-                                    const std::vector<BlockLayout>& inputs);
+                                    const std::vector<BlockLayout>& inputs,
+                                    const std::vector<std::string>& configurations = {"q"});
 // By extension: .json is JSON, anything else CSV.
 TrajectoryTable readTrajectoryFile(const std::filesystem::path& path, const Model& model,
-                                   const std::vector<BlockLayout>& inputs);
+                                   const std::vector<BlockLayout>& inputs,
+                                   const std::vector<std::string>& configurations = {"q"});
 
 }  // namespace robodiff::batch
