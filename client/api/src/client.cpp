@@ -202,6 +202,14 @@ rpc::HealthReply Client::health() {
   return reply;
 }
 
+Function Client::functionFile(const ModelInfo& model, const std::filesystem::path& spec_path) {
+  std::ifstream in(spec_path);
+  std::ostringstream text;
+  if (!in || !(text << in.rdbuf()))
+    throw ClientError({StatusCode::InvalidArgument, "cannot read the spec file " + spec_path.string()});
+  return function(model, text.str());
+}
+
 std::vector<rpc::FunctionSummary> Client::functions() {
   Impl& c = *impl_;
   if (!c.connection) throw ClientError(c.noServer());

@@ -156,6 +156,8 @@ class Client {
   ModelInfo loadModelFile(const std::filesystem::path& urdf_path, bool floating_base = false);
   // Waits until the function can be evaluated (compiled, or interpreted by the server).
   Function function(const ModelInfo& model, const std::string& spec_json);
+  // The same from a spec file (a built-in function's or a user function's JSON).
+  Function functionFile(const ModelInfo& model, const std::filesystem::path& spec_path);
 
   rpc::HealthReply health();                      // from the server; throws without one
   std::vector<rpc::FunctionSummary> functions();  // ListFunctions
