@@ -77,6 +77,13 @@ TEST(UserFunctionErrors, CyclesAndMisuse) {
   expectError(spec("frame_position([1; 2], 'tool')"), {"argument 1", "configuration", "2x1"});
 }
 
+TEST(UserFunctionErrors, ShapesOnUnknownFramesAndOversizedInputs) {
+  expectError(R"js({"inputs": {"q": "configuration"}, "shapes": {"s": {"frame": "tol", "sphere": {"radius": 0.1}}},
+    "outputs": [{"name": "y", "kind": "value", "of": "sum(q)"}]})js", {"shapes.s.frame", "'tool'"});
+  EXPECT_THROW(buildFunction(arm7(), parseFunctionSpec(R"js({"inputs": {"x": "nv * 100000"},
+    "outputs": [{"name": "y", "kind": "value", "of": "sum(x)"}]})js")), SpecTooLarge);
+}
+
 TEST(UserFunctionErrors, LimitsAreResourceErrors) {
   auto tooLarge = [](const std::string& json) {
     try {

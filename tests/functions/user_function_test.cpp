@@ -22,14 +22,6 @@ Model exampleRobot(const std::string& name, RootJoint root = RootJoint::Fixed) {
   return loadUrdfFile((testing::sourceDir() / "examples" / "robots" / (name + ".urdf")).string(), root);
 }
 
-// The variable inputs of `all` (every input in order) for evaluateBlocks.
-std::vector<Eigen::VectorXd> variableInputs(const FunctionSpec& spec, const std::vector<Eigen::VectorXd>& all) {
-  std::vector<Eigen::VectorXd> out;
-  for (std::size_t i = 0; i < spec.inputs.size(); ++i)
-    if (!spec.inputs[i].fixed) out.push_back(all[i]);
-  return out;
-}
-
 // Every output of the built function against the reference at `samples` random states.
 void expectMatchesReference(const Model& model, const std::string& json, int samples = 3, double rel = 1e-6,
                             double h_hessian = 1e-4) {
@@ -124,6 +116,15 @@ TEST(UserFunction, PrimitivesAgainstDifferences) {
         {"name": "g", "kind": "jacobian", "of": "g", "wrt": ["q", "v"]},
         {"name": "h", "kind": "jacobian", "of": "h", "wrt": ["q", "q1"]}
       ]})js", 2, 5e-5);
+}
+
+TEST(UserFunction, AHessianAloneAndTheWorldFrame) {
+  expectMatchesReference(exampleRobot("arm7"), R"js({
+    "inputs": {"q": "configuration", "v": "nv"},
+    "outputs": [
+      {"name": "h", "kind": "hessian", "of": "sumsq(com(q))", "wrt": ["q"]},
+      {"name": "still", "kind": "value", "of": "[frame_velocity(q, v, 'world'); sum(frame_jacobian(q, 'world'))]"}
+    ]})js", 2, 2e-4);
 }
 
 TEST(UserFunction, PrimitiveRulesSaveOperations) {

@@ -51,7 +51,9 @@ std::map<std::string, int> inputSizes(const Model& model, const UserFunction& f)
       } catch (const EvalError& e) {
         throw SpecError("inputs." + in.name + ": '" + in.size + "': " + e.what());
       }
-      if (sizes[in.name] < 1 || sizes[in.name] > 100000)
+      if (sizes[in.name] > 100000)
+        throw SpecTooLarge("inputs." + in.name + ": size " + std::to_string(sizes[in.name]) + " is past the limit of 100000");
+      if (sizes[in.name] < 1)
         throw SpecError("inputs." + in.name + ": size " + std::to_string(sizes[in.name]) + " is not between 1 and 100000");
     }
   }

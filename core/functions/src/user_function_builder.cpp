@@ -116,7 +116,7 @@ TracedOutput traceOutput(const Model& model, const UserFunction& f, std::size_t 
     out.nodes = nodesOf(g, c.m);
     return out;
   }
-  const std::vector<int> columns = layout.columnsOf(o.wrt);
+  const std::vector<int> columns = o.kind == UserOutputKind::Hessian ? std::vector<int>() : layout.columnsOf(o.wrt);
   const int value_rows = static_cast<int>(v.configuration ? model.nv : v.size());
   // d value / d wrt, value_rows x |columns|.
   auto tangent = [&](int r, int c) { return v.has_tangent ? v.d(r, columns[c]) : Sym(0.0); };
@@ -177,8 +177,20 @@ struct Traced {
   std::vector<TracedOutput> outputs;
 };
 
+// Every shape's frame exists (before any expression refers to it).
+void checkShapeFrames(const Model& model, const UserFunction& f) {
+  for (const auto& [name, shape] : f.shapes) {
+    try {
+      resolveFrameName(model, shape.frame, 1);
+    } catch (const EvalError& e) {
+      throw SpecError("shapes." + name + ".frame: " + e.what());
+    }
+  }
+}
+
 Traced traceUserFunction(const Model& model, const FunctionSpec& spec, bool primitive_rules, std::size_t node_limit) {
   const UserFunction& f = *spec.user;
+  checkShapeFrames(model, f);
   const std::map<std::string, int> sizes = inputSizes(model, f);
   TangentLayout layout;
   std::set<std::string> first_order, hessian_wrt;

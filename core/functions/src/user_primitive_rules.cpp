@@ -171,17 +171,21 @@ Value<Sym> abaRule(const PrimitiveCall& call) {
   const VecX<Sym> ddq = aba(model, data, call.vectors[0], call.vectors[1], call.vectors[2]);
   Value<Sym> out = withTangent(ddq, model.nv, tangentColumnsOf(call));
   MatX<Sym> rhs = MatX<Sym>::Zero(model.nv, out.d.cols());
+  MatX<Sym> factors;  // M = L^T D L, from the derivatives' sweep when it runs (d tau / d a = M)
   if (call.args[0]->has_tangent || call.args[1]->has_tangent) {
     Data<Sym> d(model);
-    MatX<Sym> dq, dv, da;
-    computeRneaDerivatives(model, d, call.vectors[0], call.vectors[1], ddq, dq, dv, da);
+    MatX<Sym> dq, dv;
+    computeRneaDerivatives(model, d, call.vectors[0], call.vectors[1], ddq, dq, dv, factors);
+    factorizeMassMatrix(dofParents(model), factors);
     chain(rhs, MatX<Sym>(-dq), *call.args[0]);
     chain(rhs, MatX<Sym>(-dv), *call.args[1]);
+  } else {
+    Data<Sym> d(model);
+    computeMinverse(model, d, call.vectors[0]);  // leaves M's factors in d.M
+    factors = d.M;
   }
   if (call.args[2]->has_tangent) rhs += call.args[2]->d;
-  Data<Sym> factors(model);
-  computeMinverse(model, factors, call.vectors[0]);  // leaves M's factors in factors.M
-  out.d = solveWithMassFactors(model, factors.M, rhs);
+  out.d = solveWithMassFactors(model, factors, rhs);
   return out;
 }
 

@@ -181,9 +181,15 @@ MatX<S> primitiveValue(const PrimitiveContext& c, const std::string& name, const
   if (name == "com_jacobian") return comJacobianValue(m, data, v[0]);
   if (name == "integrate") return integrateConfiguration(m, v[0], v[1]);
   if (name == "difference") return differenceConfiguration(m, v[0], v[1]);
-  if (name == "frame_jacobian") return computeFrameJacobian(m, data, v[0], m.frameIndex(s[1]), reference(2));
+  // The world frame does not move: its Jacobian and velocity are zero.
+  if (name == "frame_jacobian") {
+    const int f = resolveFrameName(m, s[1], 1);
+    return f < 0 ? MatX<S>(MatX<S>::Zero(6, m.nv)) : MatX<S>(computeFrameJacobian(m, data, v[0], f, reference(2)));
+  }
   if (name == "frame_velocity") {
-    const Matrix6X<S> J = computeFrameJacobian(m, data, v[0], m.frameIndex(s[2]), reference(3));
+    const int f = resolveFrameName(m, s[2], 1);
+    if (f < 0) return MatX<S>::Zero(6, 1);
+    const Matrix6X<S> J = computeFrameJacobian(m, data, v[0], f, reference(3));
     return J * v[1];
   }
   if (name == "distance") {
