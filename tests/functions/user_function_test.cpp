@@ -127,6 +127,23 @@ TEST(UserFunction, AHessianAloneAndTheWorldFrame) {
     ]})js", 2, 2e-4);
 }
 
+TEST(UserFunction, AModelFunctionSpecIsAOneLineUserFunction) {
+  const Model model = exampleRobot("quadruped", RootJoint::FreeFlyer);
+  const FunctionSpec builtin = parseFunctionSpec(
+      R"js({"function": "aba", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", "tau"]}]})js");
+  const FunctionSpec user = parseFunctionSpec(R"js({"inputs": {"q": "configuration", "v": "nv", "tau": "nv"},
+    "outputs": [{"name": "value", "kind": "value", "of": "aba(q, v, tau)"},
+                {"name": "jacobian", "kind": "jacobian", "of": "aba(q, v, tau)", "wrt": ["q", "v", "tau"]}]})js");
+  const BuiltFunction a = buildFunction(model, builtin), b = buildFunction(model, user);
+  codegen::Interpreter ia(*a.graph, a.definition), ib(*b.graph, b.definition);
+  const std::vector<Eigen::VectorXd> x = randomRuntimeInputs(model, builtin, 5);
+  const std::vector<Eigen::VectorXd> ya = evaluateBlocks(ia, a.definition, x), yb = evaluateBlocks(ib, b.definition, x);
+  EXPECT_TRUE(matricesAgree(yb[0], ya[0], 1e-12));
+  EXPECT_TRUE(matricesAgree(yb[1], ya[1], 1e-10));
+  // The same rule, within a few percent of the same operations.
+  EXPECT_LT(static_cast<double>(builtOperations(b)), 1.1 * static_cast<double>(builtOperations(a)));
+}
+
 TEST(UserFunction, PrimitiveRulesSaveOperations) {
   const Model model = exampleRobot("arm7");
   const BuiltFunction f = buildFunction(model, parseFunctionSpec(kEulerStep));

@@ -160,6 +160,20 @@ TEST_F(CliService, CommandsAgainstARealServer) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   expectSameOutputs(eval_hessian, parsed(r), 1e-12);
 
+  // A user function (the arm7 MPC knot: step, tracking cost, collision barrier) by its
+  // inputs' names: eval prints every output under its name, as compute's interpreter does.
+  const std::string knot = (sourceDir() / "examples/specs/arm7_mpc_knot.json").string();
+  const std::string knot_args = "--urdf " + arm7() + " --spec " + q(knot) + " --random-state 5";
+  r = runCommand(cli("eval " + shm + " " + knot_args));
+  ASSERT_EQ(r.exit_code, 0) << r.err << server.log();
+  const json eval_knot = parsed(r);
+  r = runCommand(cli("compute --backend interpreted " + knot_args));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json compute_knot = parsed(r);
+  for (const char* name : {"q_next", "dv_next", "tracking_hessian", "collision_gradient"})
+    EXPECT_TRUE(compute_knot.contains(name)) << name;
+  expectSameOutputs(eval_knot, compute_knot, 1e-10);
+
   // load prints the model id eval used.
   r = runCommand(cli("load --json " + shm + " --urdf " + arm7()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -180,7 +194,7 @@ TEST_F(CliService, CommandsAgainstARealServer) {
   EXPECT_NE(r.out.find("compiled"), std::string::npos) << r.out;
   r = runCommand(cli("functions --json " + shm + " --model " + eval["model_id"].get<std::string>()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(parsed(r)["functions"].size(), 2u) << r.out;
+  EXPECT_EQ(parsed(r)["functions"].size(), 3u) << r.out;  // the RNEA Jacobian, Hessian and the knot
 
   // A spec the server refuses: exit 1 with its status and message.
   const auto bad = dir_.file("bad.json", R"({"function": "no_such_function", "outputs": [{"kind": "value"}]})");
@@ -202,7 +216,7 @@ TEST_F(CliService, CommandsAgainstARealServer) {
   const json health = parsed(r);
   EXPECT_EQ(health["state"], "SERVING");
   EXPECT_EQ(health["models_loaded"], 1);
-  EXPECT_EQ(health["functions_loaded"], 2);
+  EXPECT_EQ(health["functions_loaded"], 3);
   ASSERT_EQ(health["methods"].size(), rpc::kMethodCount) << r.out;  // one per method, in Method order
   std::map<std::string, json> methods;
   for (const json& m : health["methods"]) methods[m["method"]] = m;
