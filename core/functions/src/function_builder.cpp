@@ -24,6 +24,7 @@ namespace robodiff {
 using symbolic::Graph;
 using symbolic::NodeId;
 using symbolic::Sym;
+using detail::hasFreeFlyer;
 
 namespace {
 
@@ -31,11 +32,6 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-bool hasFreeFlyer(const Model& model) {
-  for (const Joint& j : model.joints)
-    if (j.type == JointType::FreeFlyer) return true;
-  return false;
-}
 
 // Output block names: value, jacobian, hessian; with several of a kind, named by what
 // they differentiate against (jacobian_q_v), and made unique.

@@ -71,11 +71,6 @@ std::string caretLine(const std::string& text, int column) {
   return "\n    " + text + "\n    " + std::string(static_cast<std::size_t>(std::max(column, 1) - 1), ' ') + "^";
 }
 
-bool hasFreeFlyer(const Model& model) {
-  for (const Joint& j : model.joints)
-    if (j.type == JointType::FreeFlyer) return true;
-  return false;
-}
 
 }  // namespace
 

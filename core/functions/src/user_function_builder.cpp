@@ -24,11 +24,6 @@ using symbolic::Sym;
 
 namespace {
 
-bool hasFreeFlyer(const Model& model) {
-  for (const Joint& j : model.joints)
-    if (j.type == JointType::FreeFlyer) return true;
-  return false;
-}
 
 bool firstOrder(UserOutputKind k) {
   return k == UserOutputKind::Jacobian || k == UserOutputKind::Gradient || k == UserOutputKind::Vjp;

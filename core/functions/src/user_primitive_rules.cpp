@@ -52,11 +52,6 @@ MatX<Sym> solveWithMassFactors(const Model& model, const MatX<Sym>& LD, const Ma
 
 namespace {
 
-bool hasFreeFlyer(const Model& model) {
-  for (const Joint& j : model.joints)
-    if (j.type == JointType::FreeFlyer) return true;
-  return false;
-}
 
 Eigen::Index tangentColumnsOf(const PrimitiveCall& call) {
   for (const Value<Sym>* a : call.args)

@@ -53,11 +53,6 @@ int resolveFrameName(const Model& model, const std::string& name, int column) {
 
 namespace {
 
-bool hasFreeFlyer(const Model& model) {
-  for (const Joint& j : model.joints)
-    if (j.type == JointType::FreeFlyer) return true;
-  return false;
-}
 
 const char* argKindText(ArgKind k) {
   switch (k) {

@@ -58,6 +58,10 @@ Value<double> callPrimitive(const PrimitiveContext& context, const PrimitiveSign
 Value<symbolic::Sym> callPrimitive(const PrimitiveContext& context, const PrimitiveSignature& signature,
                                    const std::vector<PrimitiveArg<symbolic::Sym>>& args, int column);
 
+// Whether the model's root is a free-flyer: its configurations then live on a manifold
+// (nq = nv + 1), and their derivatives are taken in the tangent space.
+inline bool hasFreeFlyer(const Model& model) { return model.root == RootJoint::FreeFlyer; }
+
 // The frame index of a frame name (-1 for "world"); EvalError with the closest names.
 int resolveFrameName(const Model& model, const std::string& name, int column);
 
