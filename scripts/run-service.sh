@@ -78,6 +78,13 @@ echo "\$ service_demo --urdf $robot"
 "$bin/service_demo" --urdf "$robot" "${service_demo_args[@]}"
 
 echo
+echo "== a function you write: an MPC knot (Euler step + Jacobians, tracking cost + gradient"
+echo "   and Hessian, collision barrier + gradient; examples/specs/*_mpc_knot.json), built by"
+echo "   robodiffd and evaluated over a 20-knot horizon in one batch call"
+echo "\$ mpc_user_horizon"
+"$bin/mpc_user_horizon"
+
+echo
 echo "== robodiffd's health, as the CLI sees it"
 "$bin/robodiff" health
 

@@ -92,6 +92,9 @@ TEST(RunCommand, ServesUntilCtrlCThenStopsRobodiffdCleanly) {
   EXPECT_TRUE(std::regex_search(screen, std::regex(R"(Evaluate x2000 \(compiled library\): p50 [0-9.]+ us)")))
       << screen;
   EXPECT_NE(screen.find("3 functions:"), std::string::npos) << screen;  // warmed through the server
+  // A user function's 20-knot horizon in one batch call.
+  EXPECT_TRUE(std::regex_search(screen, std::regex(R"(20 knots in one evaluateBatch via [a-z]+[^\n]*\s+horizon: p50 [0-9.]+ us)")))
+      << screen;
 
   // The terminal's Ctrl-C: SIGINT to the foreground process group (the script, robodiffd).
   const char ctrl_c = '\x03';
