@@ -63,6 +63,7 @@ TEST(UserFunctionErrors, ShapeMismatchNamesBothShapes) {
 
 TEST(UserFunctionErrors, UnknownFrameSuggestsTheClosestFrames) {
   const std::string message = errorOf(spec("frame_position(q, 'tol')"));
+  EXPECT_EQ(message.rfind("s.json: define.y: column 19: ", 0), 0u) << "the source, define and column first: " << message;
   EXPECT_NE(message.find("'tol' is not a frame"), std::string::npos) << message;
   EXPECT_NE(message.find("'tool'"), std::string::npos) << message;
   EXPECT_EQ(message.find("link1"), std::string::npos) << "lists frames that are not close: " << message;

@@ -228,7 +228,27 @@ std::size_t operationsOf(const Traced& traced, std::size_t node_limit) {
 
 }  // namespace
 
+namespace {
+
+BuiltFunction buildChecked(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options);
+
+}  // namespace
+
+// Errors found while building name the spec's source first, as the parser's do.
 BuiltFunction buildUserFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  const std::string source = spec.user->source.empty() ? "" : spec.user->source + ": ";
+  try {
+    return buildChecked(model, spec, options);
+  } catch (const SpecTooLarge& e) {
+    throw SpecTooLarge(source + e.what());
+  } catch (const SpecError& e) {
+    throw SpecError(source + e.what());
+  }
+}
+
+namespace {
+
+BuiltFunction buildChecked(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
   const UserFunction& f = *spec.user;
   const auto start = std::chrono::steady_clock::now();
   Traced traced = traceUserFunction(model, spec, true, options.node_limit);
@@ -284,5 +304,7 @@ BuiltFunction buildUserFunction(const Model& model, const FunctionSpec& spec, co
   if (hessian) built.method += "; Hessians by differentiating the traced value twice";
   return built;
 }
+
+}  // namespace
 
 }  // namespace robodiff::detail

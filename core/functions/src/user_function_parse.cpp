@@ -362,7 +362,9 @@ bool isUserFunctionJson(const ordered_json& root) {
 }
 
 UserFunction parseUserFunction(const ordered_json& root, const std::string& source, const UserFunctionLimits& limits) {
-  return UserParser(source, limits).parse(root);
+  UserFunction f = UserParser(source, limits).parse(root);
+  f.source = source;
+  return f;
 }
 
 void fillSpecView(FunctionSpec& spec) {

@@ -65,6 +65,7 @@ struct UserDefine {
 
 struct UserFunction {
   std::string name = "user_function";  // the C name of the generated function
+  std::string source;                  // where the spec came from (a file), for messages
   std::vector<UserInput> inputs;       // in the order written: the runtime blocks' order
   std::vector<UserDefine> defines;
   std::vector<UserOutput> outputs;
