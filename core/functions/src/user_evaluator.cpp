@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "robodiff/language/parser.hpp"
 #include "robodiff/language/suggest.hpp"
 #include "robodiff/symbolic/configuration.hpp"
 #include "robodiff/symbolic/differentiation.hpp"
@@ -64,21 +65,11 @@ template <class S>
 Evaluator<S>::Evaluator(const PrimitiveContext& context, std::map<std::string, Value<S>> inputs)
     : context_(context), inputs_(std::move(inputs)) {}
 
-namespace {
-
-std::string caretLine(const std::string& text, int column) {
-  if (text.size() > 200 || text.find('\n') != std::string::npos) return "";
-  return "\n    " + text + "\n    " + std::string(static_cast<std::size_t>(std::max(column, 1) - 1), ' ') + "^";
-}
-
-
-}  // namespace
-
 template <class S> Value<S> Evaluator<S>::located(const Expr& e, const std::string& path, const std::string& text) {
   try {
     return eval(e);
   } catch (const EvalError& error) {
-    throw SpecError(path + ": column " + std::to_string(error.column()) + ": " + error.what() + caretLine(text, error.column()));
+    throw SpecError(path + ": column " + std::to_string(error.column()) + ": " + error.what() + language::caretLine(text, error.column()));
   }
 }
 

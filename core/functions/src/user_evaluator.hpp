@@ -44,7 +44,6 @@ template <class S> class Evaluator {
   std::map<std::string, Value<S>> inputs_;
   std::map<std::string, Value<S>> defines_;  // evaluated so far
   std::set<std::string> evaluating_;         // defines being evaluated (cycles)
-  std::map<const language::Expr*, Value<S>> shared_;  // output expressions seen
 };
 
 }  // namespace robodiff::detail

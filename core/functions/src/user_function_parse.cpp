@@ -104,13 +104,8 @@ class UserParser {
     } catch (const language::ExpressionTooLarge& e) {
       tooLarge(path, e.what());
     } catch (const language::ExpressionError& e) {
-      fail(path, std::string(e.what()) + caret(text, e.column()));
+      fail(path, std::string(e.what()) + language::caretLine(text, e.column()));
     }
-  }
-
-  static std::string caret(const std::string& text, int column) {
-    if (text.size() > 200 || text.find('\n') != std::string::npos) return "";
-    return "\n    " + text + "\n    " + std::string(static_cast<std::size_t>(std::max(column, 1) - 1), ' ') + "^";
   }
 
   // Long chains such as a + b + c + ... parse into deep trees; the evaluator walks them

@@ -4,6 +4,7 @@
 // ParseLimits::max_depth levels.
 #include "robodiff/language/parser.hpp"
 
+#include <algorithm>
 #include <utility>
 
 #include "lexer.hpp"
@@ -322,6 +323,11 @@ ExprPtr parseExpression(const std::string& text, const ParseLimits& limits) {
                                  " characters");
   }
   return Parser(text, limits).parseAll();
+}
+
+std::string caretLine(const std::string& text, int column) {
+  if (text.size() > 200 || text.find('\n') != std::string::npos) return "";
+  return "\n    " + text + "\n    " + std::string(static_cast<std::size_t>(std::max(column, 1) - 1), ' ') + "^";
 }
 
 }  // namespace robodiff::language

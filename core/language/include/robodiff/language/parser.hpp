@@ -57,4 +57,8 @@ class ExpressionTooLarge : public ExpressionError {
 // first problem. Time and memory are linear in the length of the text.
 ExprPtr parseExpression(const std::string& text, const ParseLimits& limits = {});
 
+// The text and a caret under `column`, indented, for an error message ("" for text too
+// long or spanning lines to show that way).
+std::string caretLine(const std::string& text, int column);
+
 }  // namespace robodiff::language
