@@ -14,6 +14,8 @@
 #include <thread>
 
 #include "artifact_files.hpp"
+#include "cache_state.hpp"
+#include "entry_sidecar.hpp"
 #include "permissions.hpp"
 #include "process_identity.hpp"
 #include "robodiff/cache/cache_key.hpp"
@@ -23,20 +25,6 @@ namespace robodiff::cache {
 
 namespace fs = std::filesystem;
 using namespace detail;
-
-struct Cache::State {
-  fs::path dir;
-  CacheOptions options;
-  std::unique_ptr<IndexDatabase> db;
-  std::mutex mutex;  // one SQLite connection and one set of files per Cache: one user at a time
-
-  fs::path objects() const { return dir / "objects"; }
-  fs::path staging() const { return dir / "staging"; }
-  fs::path quarantine() const { return dir / "quarantine"; }
-  fs::path objectDir(const std::string& key) const { return objects() / key.substr(0, 2) / key; }
-  fs::path stagingDir(const Claim& c) const { return staging() / (c.key + "@" + c.owner); }
-  fs::path artifactStagingDir(const Claim& c) const { return staging() / (c.key + "@" + c.owner + ".artifact"); }
-};
 
 namespace {
 
@@ -103,32 +91,40 @@ Cache Cache::open(const fs::path& dir, const CacheOptions& options) {
   const fs::path index = state->dir / "index.sqlite";
   state->db = std::make_unique<IndexDatabase>(index, options.busy_timeout);
   ::chmod(index.c_str(), 0600);
+  if (options.repair_empty_index) repairWhenIndexEmpty(*state);
   return Cache(std::move(state));
 }
 
 const fs::path& Cache::dir() const { return state_->dir; }
 const CacheOptions& Cache::options() const { return state_->options; }
 
-namespace {
-
-// Moves a bad artifact aside and drops its row, so it is never loaded and the next use
-// rebuilds it. Caller holds the mutex.
-void quarantineEntry(Cache::State& s, const std::string& key, const std::string& reason) {
+void detail::quarantineEntry(Cache::State& s, const std::string& key, const std::string& reason) {
   s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ? AND state = 'ready'").bind(1, key).run(); });
   const fs::path from = s.objectDir(key);
   const fs::path to = s.quarantine() / (key + "." + std::to_string(unixMilliseconds()));
   std::error_code ec;
-  if (fs::exists(from, ec)) fs::rename(from, to, ec);
+  if (fs::exists(from, ec)) {
+    fs::rename(from, to, ec);
+  } else {
+    fs::create_directory(to, ec);  // a record of what was lost, counted in stats().quarantined
+  }
+  if (!ec) {
+    try {
+      writeFileSynced(to / "reason", reason + "\n");
+    } catch (const std::exception&) {
+      // The move is what matters; the note is for people.
+    }
+  }
   std::cerr << "robodiff cache: entry " << key << ": " << reason << "; "
             << (ec ? "could not move it aside (" + ec.message() + "), " : "moved to " + to.string() + "; ")
             << "it will be rebuilt when next needed\n";
 }
 
-// What is wrong with a ready entry's files, or empty when nothing is.
-std::string artifactProblem(const Entry& e, const fs::path& dir) {
+std::string detail::artifactProblem(const Entry& e, const fs::path& dir) {
   std::error_code ec;
   const fs::path library = dir / "library.so";
   if (!fs::is_directory(dir, ec)) return "its directory " + dir.string() + " is missing";
+  if (fs::is_symlink(library, ec)) return "library.so is a symbolic link (replaced)";
   if (!fs::is_regular_file(library, ec)) return "library.so is missing";
   if (!fs::is_regular_file(dir / "description.json", ec)) return "description.json is missing";
   const std::uint64_t size = fs::file_size(library, ec);
@@ -147,11 +143,17 @@ std::string artifactProblem(const Entry& e, const fs::path& dir) {
   return {};
 }
 
-}  // namespace
-
-namespace {
-
-}  // namespace
+std::string detail::entryProblem(const Entry& e, const fs::path& dir) {
+  std::string problem = artifactProblem(e, dir);
+  if (!problem.empty()) return problem;
+  try {
+    checkNotWritableByOthers(dir);
+    checkNotWritableByOthers(dir / "library.so");
+  } catch (const CacheError& ex) {
+    return ex.what();
+  }
+  return {};
+}
 
 struct detail::ArtifactAccess {
   static Artifact make(Entry entry, fs::path dir, std::shared_ptr<int> pin) {
@@ -173,19 +175,23 @@ std::optional<Artifact> loadArtifact(Cache::State& s, const std::string& key, bo
   const fs::path dir = s.objectDir(key);
   const int fd = lockPin(dir, LOCK_SH);
   if (fd < 0) {
-    quarantineEntry(s, key, "its pin file is missing");
+    std::error_code ec;
+    quarantineEntry(s, key,
+                    fs::is_directory(dir, ec) ? "its pin file is missing" : "its directory " + dir.string() + " is missing");
     return std::nullopt;
   }
   std::shared_ptr<int> pin = holdPin(fd);
   row = s.db->entry(key);  // eviction may have removed it before the lock was ours
   if (!row || row->state != "ready") return std::nullopt;
-  checkNotWritableByOthers(dir);
-  checkNotWritableByOthers(dir / "library.so");
+  // Missing, truncated or replaced files: quarantined, a miss (the caller rebuilds).
   if (const std::string problem = artifactProblem(*row, dir); !problem.empty()) {
     pin.reset();
     quarantineEntry(s, key, problem);
     return std::nullopt;
   }
+  // Files another user may have written: refused, never loaded (the cache is not trusted).
+  checkNotWritableByOthers(dir);
+  checkNotWritableByOthers(dir / "library.so");
   if (count_hit) {
     const std::int64_t now = unixSeconds();
     s.db->immediate([&] {
@@ -360,9 +366,17 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
       fsyncDirectory(artifact / "src");
     }
     writeFileSynced(artifact / "pin", "");
-    fsyncDirectory(artifact);
     const std::string sha = sha256OfFile(artifact / "library.so");
     const std::uint64_t library_bytes = fs::file_size(artifact / "library.so");
+    // What `cache repair` needs to re-create this row should the index be lost.
+    Entry sidecar;
+    sidecar.key = claim.key;
+    sidecar.info = info;
+    sidecar.library_bytes = library_bytes;
+    sidecar.library_sha256 = sha;
+    sidecar.created = unixSeconds();
+    writeFileSynced(artifact / kSidecarName, sidecarText(sidecar));
+    fsyncDirectory(artifact);
     const std::uint64_t total_bytes = directoryBytes(artifact);
 
     std::lock_guard lock(s.mutex);
@@ -395,7 +409,7 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
         throw CacheError(CacheError::Kind::Io, "cannot move " + artifact.string() + " into place as " +
                                                    target.string() + ": " + std::strerror(errno));
       fsyncDirectory(target.parent_path());
-      const std::int64_t now = unixSeconds();
+      const std::int64_t now = sidecar.created;  // the row and entry.json agree
       s.db->immediate([&] {
         Statement insert(s.db->handle(),
                   "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, "
@@ -485,15 +499,7 @@ VerifyReport Cache::verify() {
   VerifyReport report;
   for (const Entry& e : s.db->entries("WHERE state = 'ready' ORDER BY key")) {
     ++report.checked;
-    std::string problem = artifactProblem(e, s.objectDir(e.key));
-    if (problem.empty()) {
-      try {
-        checkNotWritableByOthers(s.objectDir(e.key));
-        checkNotWritableByOthers(s.objectDir(e.key) / "library.so");
-      } catch (const CacheError& ex) {
-        problem = ex.what();
-      }
-    }
+    const std::string problem = entryProblem(e, s.objectDir(e.key));
     if (problem.empty()) continue;
     report.problems.push_back({e.key, problem});
     quarantineEntry(s, e.key, problem);

@@ -1,5 +1,5 @@
-// `robodiff cache ls|stat|verify|gc|rm`: look into the cache of compiled libraries,
-// check every artifact's hash, trim it to a budget, remove entries.
+// `robodiff cache ls|stat|verify|repair|gc|rm`: look into the cache of compiled libraries,
+// check every artifact's hash, rebuild a lost index, trim it to a budget, remove entries.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -186,6 +186,41 @@ void verifyEntries(const CacheArgs& args) {
   }
   std::cout.flush();
   if (!report.problems.empty()) throw CLI::RuntimeError(2);  // main returns the status without a message
+}
+
+// ---- repair -------------------------------------------------------------------------
+
+void repairIndex(const CacheArgs& args) {
+  const fs::path dir = cacheDir(args);
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) {
+    std::cerr << "robodiff: no cache at " << dir.string() << " (nothing built there yet)\n";
+    std::cout << (args.json ? json{{"scanned", 0}, {"recovered", 0}, {"already_indexed", 0}, {"quarantined", json::array()}}.dump(2)
+                            : "nothing to repair")
+              << "\n";
+    return;
+  }
+  cache::Cache cache = openCliCache(dir, args.budget, false, false);
+  const cache::RepairReport report = cache.repair();
+  if (args.json) {
+    json quarantined = json::array();
+    for (const cache::VerifyProblem& p : report.quarantined) quarantined.push_back({{"key", p.key}, {"problem", p.problem}});
+    std::cout << json{{"scanned", report.scanned},
+                      {"recovered", report.recovered},
+                      {"already_indexed", report.already_indexed},
+                      {"quarantined", quarantined}}
+                     .dump(2)
+              << "\n";
+    return;
+  }
+  if (!report.quarantined.empty()) {
+    Table table = Table::rows({"key", "problem"}, {false, false});
+    for (const cache::VerifyProblem& p : report.quarantined) table.addRow({keyPrefix(p.key), p.problem});
+    table.print(std::cout);
+  }
+  std::cout << report.recovered << " recovered, " << report.quarantined.size() << " quarantined, "
+            << report.already_indexed << " already indexed (" << report.scanned
+            << (report.scanned == 1 ? " object directory" : " object directories") << " scanned)\n";
 }
 
 // ---- gc -----------------------------------------------------------------------------
@@ -378,6 +413,17 @@ void addCacheCommand(CLI::App& app) {
       "Exit status: 0 when every entry is sound, 2 when problems were found (each is listed), 1 on "
       "errors.");
   vf->callback([args] { verifyEntries(*args); });
+
+  CLI::App* rp = cmd->add_subcommand(
+      "repair", "Rebuild the index from the objects on disk: re-index good ones, quarantine bad ones");
+  addCommonOptions(*rp, *args, "Print a JSON object: scanned, recovered, already_indexed, quarantined [{key, problem}]");
+  rp->footer(
+      "Each object directory's entry.json (written when it was published) gives its index row; the library's "
+      "size and SHA-256 are checked against it. Entries that are missing, damaged or cannot be verified are "
+      "moved to quarantine (rebuilt on next use). Opening a cache whose index is missing or empty repairs it "
+      "by itself; this command does it on demand and reports it.\n"
+      "Exit status: 0 when the index was repaired (quarantined entries included), 1 on errors.");
+  rp->callback([args] { repairIndex(*args); });
 
   CLI::App* gcc = cmd->add_subcommand(
       "gc",

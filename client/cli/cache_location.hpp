@@ -13,6 +13,8 @@ std::filesystem::path cacheDirFor(const std::string& cache_flag);
 
 // Opens (creating it when `create`) the cache in dir. Throws cache::CacheError whose
 // message names dir.
-cache::Cache openCliCache(const std::filesystem::path& dir, const std::string& budget_flag, bool create);
+// `repair_empty_index`: as cache::CacheOptions (off for `cache repair`, which reports it).
+cache::Cache openCliCache(const std::filesystem::path& dir, const std::string& budget_flag, bool create,
+                          bool repair_empty_index = true);
 
 }  // namespace robodiff::cli

@@ -121,6 +121,60 @@ TEST(CacheCli, WarmupRebuildsADamagedLibraryItFinds) {
   EXPECT_EQ(w.cacheCommand("verify").exit_code, 0);
 }
 
+// A library deleted from the cache: warmup quarantines the entry and builds it again.
+TEST(CacheCli, WarmupRebuildsADeletedLibrary) {
+  CacheWorkspace w;
+  ASSERT_EQ(w.warmup({"crba"}).exit_code, 0);
+  const std::string key = w.cacheJson("ls")[0]["key"];
+  fs::remove(w.library(key));
+  testing::ProcessResult r = w.warmup({"crba"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("done "), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("library.so is missing"), std::string::npos) << r.err;
+  EXPECT_EQ(w.builds(), 2u);
+  EXPECT_TRUE(fs::is_regular_file(w.library(key)));
+  EXPECT_EQ(w.cacheCommand("verify").exit_code, 0);
+}
+
+// The index deleted: `cache repair` re-creates every good entry from the objects (a
+// damaged one is quarantined), and the next warmup finds them without compiling.
+TEST(CacheCli, RepairRecoversALostIndexAndTheNextUseIsAHit) {
+  CacheWorkspace w;
+  ASSERT_EQ(w.warmup({"crba", "nle", "rnea_jacobian"}).exit_code, 0);
+  const json before = w.cacheJson("ls");
+  ASSERT_EQ(before.size(), 3u);
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(w.cache / (std::string("index.sqlite") + suffix));
+  const std::string damaged_key = before[0]["key"];
+  damage(w.library(damaged_key), Damage::TruncateToHalf);
+
+  testing::ProcessResult r = w.cacheCommand("repair");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("2 recovered, 1 quarantined, 0 already indexed (3 object directories scanned)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find(damaged_key.substr(0, 12)), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("truncated"), std::string::npos) << r.out;
+  const json after = w.cacheJson("ls");
+  ASSERT_EQ(after.size(), 2u) << after.dump(2);
+  for (const json& e : after) {
+    for (const json& b : before) {
+      if (b["key"] != e["key"]) continue;
+      EXPECT_EQ(e["library_sha256"], b["library_sha256"]);
+      EXPECT_EQ(e["function"], b["function"]);
+      EXPECT_EQ(e["total_bytes"], b["total_bytes"]);
+    }
+  }
+  const json again = w.cacheJson("repair");
+  EXPECT_EQ(again["recovered"], 0);
+  EXPECT_EQ(again["already_indexed"], 2);
+
+  r = w.warmup({"crba", "nle", "rnea_jacobian"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_EQ(countOf(r.out, "cached "), 2u) << r.out;
+  EXPECT_EQ(w.builds(), 4u);  // only the quarantined one compiled again
+  EXPECT_EQ(w.cacheCommand("verify").exit_code, 0);
+}
+
 TEST(CacheCli, LsStatRmAndGcAgree) {
   CacheWorkspace w;
   ASSERT_EQ(w.warmup({"crba", "nle", "rnea_jacobian"}).exit_code, 0);
@@ -215,7 +269,7 @@ TEST(CacheCli, AMissingCacheIsEmptyAndAnUnsafeOneIsRefused) {
 }
 
 TEST(CacheCli, HelpSaysWhatEachSubcommandDoesAndTheExitStatus) {
-  for (const std::string sub : {"", "ls", "stat", "verify", "gc", "rm"}) {
+  for (const std::string sub : {"", "ls", "stat", "verify", "repair", "gc", "rm"}) {
     SCOPED_TRACE(sub);
     testing::ProcessResult r = runCommand(cli("cache " + sub + " --help"));
     EXPECT_EQ(r.exit_code, 0);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -91,6 +92,29 @@ TEST(CachedBuilder, BuildsOncePublishesAndThenFindsInTheCache) {
   EXPECT_EQ(pool.stats().succeeded, 2u);  // no job for the cached ones
 }
 
+TEST(CachedBuilder, ACachedEntryWhoseLibraryIsGoneIsQuarantinedAndBuiltAgain) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  CachedBuilder builder(cache, pool);
+  const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "gravity_jacobian"), ""}};
+  const BuildStatus first = builder.buildAll(targets).at(0);
+  ASSERT_EQ(first.state, BuildState::Done) << first.message;
+  const fs::path library = cache.find(first.key)->library();
+  fs::remove(library);
+
+  ::testing::internal::CaptureStderr();
+  const BuildStatus again = builder.buildAll(targets).at(0);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  ASSERT_EQ(again.state, BuildState::Done) << again.message;  // built again, not "cached", not failed
+  EXPECT_NE(log.find("library.so is missing"), std::string::npos) << log;
+  EXPECT_EQ(again.key, first.key);
+  const std::optional<cache::Artifact> a = cache.find(again.key);
+  ASSERT_TRUE(a);
+  EXPECT_NO_THROW(codegen::LoadedLibrary::open(a->library()).function(again.function));
+  EXPECT_EQ(cache.stats().quarantined, 1u);
+}
+
 TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   TempDir tmp;
   cache::Cache cache = cache::Cache::open(tmp / "cache");
@@ -98,6 +122,7 @@ TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   const fs::path pid_file = tmp / "compiler.pid";
   CachedBuilderOptions options;
   options.compiler = compilerScript(tmp, "slow-cc", "echo $$ > " + pid_file.string() + "\nexec sleep 60\n");
+  options.worker_death_backoff = {};  // no retry: the one death fails the build
   CachedBuilder builder(cache, pool, options);
   const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""}};
 
@@ -144,6 +169,91 @@ TEST(CachedBuilder, ACompilerErrorReachesTheCallerAndNothingIsPublished) {
   EXPECT_NE(result[0].message.find("simulated failure for the test"), std::string::npos) << result[0].message;
   EXPECT_TRUE(cache.list().empty());
   EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
+  // A compiler error is the build's own fault: one job, not retried.
+  EXPECT_EQ(pool.stats().failed, 1u);
+  EXPECT_EQ(pool.stats().crashed, 0u);
+}
+
+// Kills the worker running the job each time the compiler script has appended to `log`
+// since the last kill (one kill per worker), until `done` is ready; returns how many.
+int killWorkerAtEachCompile(WorkerPool& pool, const fs::path& log, std::future<std::vector<BuildStatus>>& done,
+                            int at_most) {
+  int killed = 0;
+  std::uintmax_t log_size_at_kill = 0;
+  pid_t last_killed = 0;
+  while (done.wait_for(std::chrono::milliseconds(5)) != std::future_status::ready) {
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(log, ec);
+    if (killed >= at_most || ec || size <= log_size_at_kill) continue;
+    for (const WorkerInfo& w : pool.workers()) {
+      if (w.job && w.pid > 0 && w.pid != last_killed && ::kill(w.pid, SIGKILL) == 0) {
+        ++killed;
+        last_killed = w.pid;
+        log_size_at_kill = size;
+        break;
+      }
+    }
+  }
+  return killed;
+}
+
+TEST(CachedBuilder, ABuildWhoseWorkerIsKilledIsRetriedAfterAPauseAndSucceeds) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  const fs::path log = tmp / "compiles.log";
+  CachedBuilderOptions options;  // the default pauses: 0.5 s, 2 s
+  // The first compile hangs (and is killed with its worker); later ones are cc's.
+  options.compiler = compilerScript(tmp, "once-hanging-cc",
+                                    "if [ ! -e " + (tmp / "hung").string() + " ]; then touch " + (tmp / "hung").string() +
+                                        "; echo $$ >> " + log.string() + "; exec sleep 60; fi\nexec cc \"$@\"\n");
+  CachedBuilder builder(cache, pool, options);
+  std::vector<std::string> retry_messages;
+  const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""}};
+  auto done = std::async(std::launch::async, [&] {
+    return builder.buildAll(targets, [&](std::size_t, const BuildStatus& s) {
+      if (s.state == BuildState::Queued && !s.message.empty()) retry_messages.push_back(s.message);
+    });
+  });
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(killWorkerAtEachCompile(pool, log, done, 1), 1);
+  ::testing::internal::GetCapturedStderr();
+  const std::vector<BuildStatus> result = done.get();
+
+  ASSERT_EQ(result[0].state, BuildState::Done) << result[0].message;
+  ASSERT_EQ(retry_messages.size(), 1u);
+  EXPECT_NE(retry_messages[0].find("SIGKILL"), std::string::npos) << retry_messages[0];
+  EXPECT_NE(retry_messages[0].find("trying again in 0.5 s (attempt 2 of 3)"), std::string::npos) << retry_messages[0];
+  EXPECT_EQ(pool.stats().crashed, 1u);
+  EXPECT_EQ(pool.stats().succeeded, 1u);
+  const std::optional<cache::Artifact> a = cache.find(result[0].key);
+  ASSERT_TRUE(a);
+  EXPECT_NO_THROW(codegen::LoadedLibrary::open(a->library()).function(result[0].function));
+  EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
+}
+
+TEST(CachedBuilder, ABuildWhoseWorkerIsKilledEveryTimeFailsAfterThreeAttemptsNamingTheSignal) {
+  TempDir tmp;
+  cache::Cache cache = cache::Cache::open(tmp / "cache");
+  WorkerPool pool(poolOptions());
+  const fs::path log = tmp / "compiles.log";
+  CachedBuilderOptions options;
+  options.worker_death_backoff = {std::chrono::milliseconds(50), std::chrono::milliseconds(100)};
+  options.compiler = compilerScript(tmp, "hanging-cc", "echo $$ >> " + log.string() + "\nexec sleep 60\n");
+  CachedBuilder builder(cache, pool, options);
+  const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "crba"), ""}};
+  auto done = std::async(std::launch::async, [&] { return builder.buildAll(targets); });
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(killWorkerAtEachCompile(pool, log, done, 10), 3);
+  const std::string stderr_text = ::testing::internal::GetCapturedStderr();
+  const std::vector<BuildStatus> result = done.get();
+
+  ASSERT_EQ(result[0].state, BuildState::Failed);
+  EXPECT_NE(result[0].message.find("killed by signal 9 (SIGKILL)"), std::string::npos) << result[0].message;
+  EXPECT_NE(result[0].message.find("3 attempts"), std::string::npos) << result[0].message;
+  EXPECT_NE(stderr_text.find("attempt 3 of 3"), std::string::npos) << stderr_text;
+  EXPECT_EQ(pool.stats().crashed, 3u);
+  testing::expectNothingLeft(cache, result[0].key);
 }
 
 TEST(CachedBuilder, BadRobotsAndSpecsFailWithTheirReasonWithoutAWorker) {

@@ -69,7 +69,15 @@ struct Work {
   BuildRequest request;             // all but the claim, filled when prepared
   std::optional<cache::Claim> claim;  // held by this process while a worker builds
   std::optional<JobHandle> job;
+  unsigned attempts = 0;                    // jobs submitted for it
+  std::optional<Clock::time_point> retry_at;  // its worker died: submit again then (claim kept)
 };
+
+std::string secondsText(std::chrono::milliseconds d) {
+  std::ostringstream s;
+  s << std::chrono::duration<double>(d).count() << " s";
+  return s.str();
+}
 
 std::string failureMessage(const JobResult& r) {
   if (r.state == JobState::Succeeded || r.state == JobState::Failed) {
@@ -197,11 +205,25 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
   });
 
   // 3. Claim, wait or hand to a worker, until every target is final.
+  const unsigned max_attempts = 1 + static_cast<unsigned>(options_.worker_death_backoff.size());
   auto finishJob = [&](std::size_t i, const JobResult& r) {  // caller holds mutex
     Work& w = work[i];
+    w.job.reset();
+    // The worker died (killed, crashed, out of memory): not the build's fault, so it is
+    // tried again under the same claim after a pause; a build that failed is not.
+    if (r.state == JobState::Crashed && w.attempts < max_attempts) {
+      const std::chrono::milliseconds pause = options_.worker_death_backoff[w.attempts - 1];
+      w.retry_at = Clock::now() + pause;
+      std::cerr << "robodiff: building " << w.status.robot << "/" << w.status.function << ": " << r.message
+                << "; trying again in " << secondsText(pause) << " (attempt " << w.attempts + 1 << " of "
+                << max_attempts << ")\n";
+      setState(i, BuildState::Queued,
+               r.message + "; trying again in " + secondsText(pause) + " (attempt " + std::to_string(w.attempts + 1) +
+                   " of " + std::to_string(max_attempts) + ")");
+      return;
+    }
     const cache::Claim claim = *w.claim;
     w.claim.reset();
-    w.job.reset();
     if (r.state == JobState::Succeeded) {
       try {
         const BuildOutcome o = buildOutcomeFromJson(r.reply);
@@ -212,7 +234,74 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
       return;
     }
     cache_.abandon(claim);  // nothing of a failed build stays: no row, no staging
-    setState(i, BuildState::Failed, failureMessage(r));
+    std::string message = failureMessage(r);
+    if (r.state == JobState::Crashed && w.attempts > 1)
+      message += " (" + std::to_string(w.attempts) + " attempts; the worker died in each)";
+    setState(i, BuildState::Failed, message);
+  };
+
+  // Hands a claimed target to the pool. Caller holds `lock` (on mutex); it is released
+  // while submitting.
+  auto submitBuild = [&](std::size_t i, std::unique_lock<std::mutex>& lock) {
+    Work& w = work[i];
+    w.request.claim = *w.claim;
+    JobCallbacks callbacks;
+    callbacks.on_start = [&, i](pid_t) {
+      std::lock_guard inner(mutex);
+      if (isFinal(work[i].status.state)) return;
+      work[i].started = Clock::now();  // from here on, seconds is the build's own time
+      setState(i, BuildState::Building);
+    };
+    callbacks.on_progress = [&, i](const std::string& message) {
+      std::string stage;
+      try {
+        stage = nlohmann::json::parse(message).value("stage", "");
+      } catch (const std::exception&) {
+        return;
+      }
+      std::lock_guard inner(mutex);
+      if (isFinal(work[i].status.state)) return;
+      work[i].status.stage = stage;
+      setState(i, BuildState::Building);
+    };
+    try {
+      const std::string request = buildRequestMessage(toJson(w.request));
+      lock.unlock();
+      JobHandle handle = pool_.submit(request, callbacks, options_.job_timeout);
+      lock.lock();
+      w.job = handle;
+      ++w.attempts;
+      if (w.status.state == BuildState::Pending || w.status.state == BuildState::Waiting)
+        setState(i, BuildState::Queued);
+    } catch (const QueueFull&) {
+      if (!lock.owns_lock()) lock.lock();
+      cache_.abandon(*w.claim);  // try again on a later round
+      w.claim.reset();
+    } catch (const std::exception& e) {
+      if (!lock.owns_lock()) lock.lock();
+      cache_.abandon(*w.claim);
+      w.claim.reset();
+      setState(i, BuildState::Failed, e.what());
+    }
+  };
+
+  // A target whose worker died, once its pause is over: done already if the dead worker
+  // had published it, else submitted again. Caller holds `lock`.
+  auto retryBuild = [&](std::size_t i, std::unique_lock<std::mutex>& lock) {
+    Work& w = work[i];
+    w.retry_at.reset();
+    std::optional<cache::Entry> row;
+    try {
+      row = cache_.entry(w.prepared->key);
+    } catch (const std::exception&) {
+    }
+    if (row && row->state == "ready") {
+      w.claim.reset();
+      w.status.library_bytes = row->library_bytes;
+      setState(i, BuildState::Done);
+      return;
+    }
+    submitBuild(i, lock);
   };
 
   for (;;) {
@@ -227,6 +316,10 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
           const JobResult result = w.job->result.get();  // a copy: finishJob drops the future
           finishJob(i, result);
         }
+        continue;
+      }
+      if (w.retry_at) {
+        if (Clock::now() >= *w.retry_at) retryBuild(i, lock);
         continue;
       }
       lock.unlock();
@@ -246,44 +339,7 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
         if (w.status.state != BuildState::Waiting) setState(i, BuildState::Waiting, "built by " + claimed.holder);
       } else {
         w.claim = claimed.claim;
-        w.request.claim = *claimed.claim;
-        JobCallbacks callbacks;
-        callbacks.on_start = [&, i](pid_t) {
-          std::lock_guard inner(mutex);
-          if (isFinal(work[i].status.state)) return;
-          work[i].started = Clock::now();  // from here on, seconds is the build's own time
-          setState(i, BuildState::Building);
-        };
-        callbacks.on_progress = [&, i](const std::string& message) {
-          std::string stage;
-          try {
-            stage = nlohmann::json::parse(message).value("stage", "");
-          } catch (const std::exception&) {
-            return;
-          }
-          std::lock_guard inner(mutex);
-          if (isFinal(work[i].status.state)) return;
-          work[i].status.stage = stage;
-          setState(i, BuildState::Building);
-        };
-        try {
-          const std::string request = buildRequestMessage(toJson(w.request));
-          lock.unlock();
-          JobHandle handle = pool_.submit(request, callbacks, options_.job_timeout);
-          lock.lock();
-          w.job = handle;
-          if (w.status.state == BuildState::Pending || w.status.state == BuildState::Waiting)
-            setState(i, BuildState::Queued);
-        } catch (const QueueFull&) {
-          if (!lock.owns_lock()) lock.lock();
-          cache_.abandon(*w.claim);  // try again on a later round
-          w.claim.reset();
-        } catch (const std::exception& e) {
-          if (!lock.owns_lock()) lock.lock();
-          cache_.abandon(*w.claim);
-          w.claim.reset();
-          setState(i, BuildState::Failed, e.what());
-        }
+        submitBuild(i, lock);
       }
     }
     if (all_final) break;

@@ -6,18 +6,21 @@
 //   DIR/objects/<kk>/<key>/    one directory per key, never changed once in place:
 //       library.so             the compiled library
 //       description.json       its description (inputs, outputs, sparsity, build)
+//       entry.json             its index row's metadata and library SHA-256 (for repair)
 //       src/<file>.zst         the C sources as compiled, zstd-compressed
 //       pin                    readers hold a shared flock on it: in use, not evicted
 //   DIR/staging/               builds in progress (one directory per claim)
-//   DIR/quarantine/            artifacts found corrupt, moved aside, never loaded
+//   DIR/quarantine/            artifacts found missing or corrupt, moved aside (with a
+//                              `reason` file), never loaded
 //
 // A key is built once across processes: claim() records a claim with a lease in the
 // index; other processes wait for it (waitOrClaim) and take it over when the lease
 // runs out or its owner (same host) is dead. publish() writes the artifact under a
 // temporary name, fsyncs it, renames it into place and only then marks it ready, so a
 // reader never sees a partial artifact. Every find() checks the library's SHA-256
-// against the index before handing it out; a mismatch is moved to quarantine, logged
-// (to stderr) and reported as a miss, so the next build replaces it.
+// against the index before handing it out; a missing, truncated or replaced library is
+// moved to quarantine, logged (to stderr) and reported as a miss, so the next build
+// replaces it. A lost or empty index is rebuilt from the objects' entry.json (repair()).
 #pragma once
 
 #include <chrono>
@@ -55,6 +58,9 @@ struct CacheOptions {
   // How long a writer waits for SQLite's lock before giving up.
   std::chrono::milliseconds busy_timeout = std::chrono::seconds(30);
   bool create = true;  // create DIR (0700) when missing
+  // When the index has no entries but objects exist (index.sqlite deleted, emptied):
+  // run repair() at open, logging its summary to stderr.
+  bool repair_empty_index = true;
 };
 
 // What the builder tells the index about an artifact.
@@ -145,6 +151,13 @@ struct VerifyReport {
   std::vector<VerifyProblem> problems;  // each one was moved to quarantine and unindexed
 };
 
+struct RepairReport {
+  std::uint64_t scanned = 0;        // object directories looked at
+  std::uint64_t already_indexed = 0;  // with a good ready row: left alone
+  std::uint64_t recovered = 0;      // good, unindexed: their rows re-created
+  std::vector<VerifyProblem> quarantined;  // bad (or unverifiable): moved to quarantine
+};
+
 struct GcReport {
   std::vector<std::string> evicted;  // keys, least recently used first
   std::uint64_t freed_bytes = 0, bytes_after = 0;
@@ -167,7 +180,8 @@ class Cache {
   const CacheOptions& options() const;
 
   // The verified artifact for key, counted as a hit; nullopt when absent, building, or
-  // found corrupt (then quarantined and unindexed).
+  // found missing or corrupt (then quarantined and unindexed, so the caller rebuilds it).
+  // Throws CacheError(Permissions) when its files are another user's or writable by others.
   std::optional<Artifact> find(const std::string& key);
 
   // Ready artifact, or a claim for this process, or Busy. A claim whose lease ran out or
@@ -193,6 +207,10 @@ class Cache {
   CacheStats stats();
   // Checks every ready artifact's files and library hash.
   VerifyReport verify();
+  // Re-creates the index from the objects on disk: verifies every indexed entry (as
+  // verify()), then every object directory without a row against its entry.json (size,
+  // SHA-256, key); good ones are indexed again, bad or unverifiable ones quarantined.
+  RepairReport repair();
   // Evicts least-recently-used unpinned entries until the total fits `budget_bytes`
   // (the configured budget when unset); removes claims and staging left by dead processes.
   GcReport gc(std::optional<std::uint64_t> budget_bytes = std::nullopt);

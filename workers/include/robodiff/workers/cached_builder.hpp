@@ -4,7 +4,8 @@
 //   - being built by another process: Waiting until it is ready (Cached), or until that
 //     process's claim lapses (then this process claims it);
 //   - otherwise claimed here, queued to a worker (Queued, Building), published by the
-//     worker (Done); a failed or crashed job drops the claim and leaves nothing behind.
+//     worker (Done); a failed job drops the claim and leaves nothing behind; a job whose
+//     worker died is retried (bounded, with backoff) before it counts as failed.
 // Claims in flight are renewed by a thread of their own while workers build.
 // Used by `robodiff warmup` now and the server later.
 #pragma once
@@ -61,6 +62,12 @@ struct CachedBuilderOptions {
   std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
   std::chrono::milliseconds job_timeout = std::chrono::minutes(15);
   std::chrono::milliseconds poll_interval = std::chrono::milliseconds(100);  // while Waiting
+  // A build whose worker died (killed, crashed, out of memory: JobState::Crashed) is
+  // submitted again, under the same claim, after each of these pauses in turn; then it
+  // fails naming the last death and the number of attempts. A build that failed (a
+  // compiler error, a timeout) is never retried.
+  std::vector<std::chrono::milliseconds> worker_death_backoff = {std::chrono::milliseconds(500),
+                                                                 std::chrono::seconds(2)};
 };
 
 class CachedBuilder {
