@@ -121,7 +121,7 @@ TEST(LoadModel, LimitsOnSizeAndCount) {
   request.urdf = arm7Urdf();
   rpc::LoadModelReply reply;
   Status status = service->loadModel(context(), request, reply);
-  EXPECT_EQ(status.code, StatusCode::InvalidArgument);
+  EXPECT_EQ(status.code, StatusCode::ResourceExhausted);
   EXPECT_NE(status.message.find("max_urdf_bytes"), std::string::npos) << status.message;
 
   options.max_urdf_bytes = std::size_t{1} << 20;

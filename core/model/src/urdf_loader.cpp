@@ -13,6 +13,7 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "mass_matrix_check.hpp"
 #include "urdf_validation.hpp"
 
 namespace robodiff {
@@ -192,22 +193,32 @@ std::string normaliseWhitespace(std::string xml) {
 
 }  // namespace
 
-Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& source_name) {
-  detail::validateUrdfXml(xml, source_name);
+Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& source_name,
+                     const UrdfLimits& limits, PhysicsCheck physics) {
+  checkUrdfLimits(xml, limits, source_name);  // before the parsers, which recurse per level
+  const bool dynamic = physics == PhysicsCheck::Dynamic;
+  detail::validateUrdfXml(xml, source_name, dynamic);
   urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(normaliseWhitespace(xml), source_name);
-  return build(*parsed, root);
+  Model model = build(*parsed, root);
+  if (dynamic) detail::checkMassMatrixRegular(model, source_name);
+  return model;
 }
 
-Model loadUrdfFile(const std::string& path, RootJoint root) {
+Model loadUrdfFile(const std::string& path, RootJoint root, const UrdfLimits& limits, PhysicsCheck physics) {
   std::error_code ec;  // a directory opens as a stream and reads as an empty document
   if (std::filesystem::is_directory(path, ec))
     throw ModelError(path + ": cannot read URDF file: it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelError(path + ": cannot open URDF file: " + std::strerror(errno));
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > limits.max_bytes)  // refused before reading it
+    throw ModelTooLarge(path + ": the URDF is " + std::to_string(size) + " bytes; the limit is max_bytes = " +
+                            std::to_string(limits.max_bytes),
+                        "max_bytes", size, limits.max_bytes);
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ModelError(path + ": cannot read URDF file");
-  return loadUrdfString(text.str(), root, path);
+  return loadUrdfString(text.str(), root, path, limits, physics);
 }
 
 }  // namespace robodiff

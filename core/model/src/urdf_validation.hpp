@@ -6,7 +6,8 @@
 
 namespace robodiff::detail {
 
-// Throws ModelError on the first problem found.
-void validateUrdfXml(const std::string& xml, const std::string& source);
+// Throws ModelError on the first problem found; `triangle_inequality`: also refuse a
+// link whose principal moments violate it.
+void validateUrdfXml(const std::string& xml, const std::string& source, bool triangle_inequality);
 
 }  // namespace robodiff::detail
