@@ -23,7 +23,7 @@ void listFunctions(const FunctionsArgs& args) {
   rpc::ListFunctionsRequest request;
   request.model_id = args.model;
   rpc::ListFunctionsReply reply;
-  check(c->listFunctions(request, reply, c.call()), "ListFunctions");
+  check(client::listAllFunctions(*c.connection, request, reply.functions, c.call()), "ListFunctions");
   if (args.json) {
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (const rpc::FunctionSummary& f : reply.functions)

@@ -101,6 +101,9 @@ TEST(DdsCodec, RequestBodiesBothWays) {
   EXPECT_TRUE(empty_batch.inputs.empty());
 
   EXPECT_EQ(viaRequest(rpc::ListFunctionsRequest{"model-9"}).model_id, "model-9");
+  const auto paged = viaRequest(rpc::ListFunctionsRequest{"model-9", 50, "page-7"});
+  EXPECT_EQ(paged.page_size, 50u);
+  EXPECT_EQ(paged.page_token, "page-7");
   EXPECT_TRUE(viaRequest(rpc::HealthRequest{true}).verbose);
   EXPECT_EQ(viaRequest(rpc::ReleaseRequest{"fn-9"}).id, "fn-9");
 }
@@ -151,7 +154,11 @@ TEST(DdsCodec, ReplyBodiesBothWays) {
   rpc::ListFunctionsReply list;
   list.functions = {{"fn-1", "m-1", "rnea", rpc::FunctionState::Ready, true, 123456789012ull, ""},
                     {"fn-2", "m-1", "aba", rpc::FunctionState::Building, false, 0, "queued"}};
+  list.next_page_token = "17";
+  list.total = 300;
   const auto listed = viaReply(list);
+  EXPECT_EQ(listed.next_page_token, "17");
+  EXPECT_EQ(listed.total, 300u);
   ASSERT_EQ(listed.functions.size(), 2u);
   for (std::size_t i = 0; i < 2; ++i) {
     const auto &a = listed.functions[i], &b = list.functions[i];

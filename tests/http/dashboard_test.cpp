@@ -50,7 +50,7 @@ server::ServiceOverview sampleOverview() {
   f.trace_seconds = 0.25;
   f.compile_seconds = -1;  // not compiled: null
   o.functions.push_back(f);
-  o.build_failures.push_back({1.8e9, "f0", "arm7", "crba", "cc: error: boom", true});
+  o.build_failures.push_back({1.8e9, "f0", "arm7", "crba", "cc: error: boom", true, "compile"});
   rpc::JobInfo job;
   job.job_id = "j1";
   job.kind = "trajectory";
@@ -95,6 +95,7 @@ TEST(Dashboard, OverviewJsonCarriesEveryFieldInItsUnit) {
   ASSERT_EQ(j["build_failures"].size(), 1u);
   EXPECT_EQ(j["build_failures"][0]["message"], "cc: error: boom");
   EXPECT_TRUE(j["build_failures"][0]["interpreter_serves"].get<bool>());
+  EXPECT_EQ(j["build_failures"][0]["stage"], "compile");
 
   ASSERT_EQ(j["jobs"].size(), 1u);
   EXPECT_EQ(j["jobs"][0]["state"], "RUNNING");

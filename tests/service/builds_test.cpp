@@ -138,20 +138,30 @@ TEST(Builds, ASpecThatDoesNotFitTheModelFailsTheFunction) {
   EXPECT_NE(status.message.find("no_such_frame"), std::string::npos) << status.message;
   EXPECT_EQ(reply.state, rpc::FunctionState::Failed);
   ASSERT_FALSE(reply.function_id.empty());
-  const rpc::FunctionSummary summary = summaryOf(*service, reply.function_id);
-  EXPECT_EQ(summary.state, rpc::FunctionState::Failed);
-  EXPECT_NE(summary.message.find("no_such_frame"), std::string::npos) << summary.message;
+  // A failed function holds no slot: it is unloaded at once, and not listed.
+  rpc::ListFunctionsReply list;
+  ASSERT_TRUE(service->listFunctions(context(), {}, list).ok());
+  EXPECT_TRUE(list.functions.empty());
   std::vector<double> in(7, 0.0), out(12, 0.0);
   status = service->evaluate(context(), reply.function_id, in, out);
-  EXPECT_EQ(status.code, StatusCode::FailedPrecondition);
-  EXPECT_NE(status.message.find("no_such_frame"), std::string::npos) << status.message;
+  EXPECT_EQ(status.code, StatusCode::NotFound);
+  EXPECT_NE(status.message.find("failed to build"), std::string::npos) << status.message;
+  // Asked again (with or without wait), the same answer, from the record of recent failures.
+  for (const bool wait : {true, false}) {
+    rpc::GetFunctionReply again;
+    status = getFunction(*service, model.model_id, spec, wait, again);
+    EXPECT_EQ(status.code, StatusCode::InvalidArgument);
+    EXPECT_NE(status.message.find("no_such_frame"), std::string::npos) << status.message;
+    EXPECT_EQ(again.state, rpc::FunctionState::Failed);
+    EXPECT_EQ(again.function_id, reply.function_id);
+  }
 
   // A spec that is not a spec at all is refused before anything is made.
   status =
       getFunction(*service, model.model_id, R"({"function": "rnea", "outputs": [{"kind": "nonsense"}]})", false, reply);
   EXPECT_EQ(status.code, StatusCode::InvalidArgument);
   EXPECT_NE(status.message.find("outputs[0]"), std::string::npos) << status.message;
-  EXPECT_EQ(health(*service).functions_loaded, 1u);
+  EXPECT_EQ(health(*service).functions_loaded, 0u);
 }
 
 TEST(Builds, WithoutWaitTheReplyComesAtOnceAndEvaluationWaitsForReady) {

@@ -2,7 +2,8 @@
 // processes: a function's phase follows its build (queued or compiling while the compiler
 // waits, then compiled, then a cache hit for the next server), its calls and batches are
 // counted and timed, failed builds are listed with the compiler's message (and stay
-// listed after the function is released), a spec failure shows as failed, the jobs are
+// listed after the function is released), a spec failure is listed as invalid-spec (its
+// function unloaded at once), the jobs are
 // the index's newest, and the method histograms hold every request.
 #include <fstream>
 
@@ -119,11 +120,12 @@ TEST(Overview, FailedBuildsAreListedWithTheirMessagesAfterTheFunctionIsGone) {
                            bad)
                    .ok());
   ServiceOverview o = service->overview();
-  EXPECT_EQ(phaseOf(*service, bad.function_id), "failed");
+  EXPECT_EQ(functionIn(o, bad.function_id), nullptr);  // unloaded at once; its failure is listed
   ASSERT_EQ(o.build_failures.size(), 2u);
   const auto& spec_failure = o.build_failures[0];  // newest first
   EXPECT_EQ(spec_failure.function_id, bad.function_id);
   EXPECT_EQ(spec_failure.function, "fk");
+  EXPECT_EQ(spec_failure.stage, "invalid-spec");
   EXPECT_FALSE(spec_failure.interpreter_serves);
   EXPECT_NE(spec_failure.message.find("no_such_frame"), std::string::npos) << spec_failure.message;
   const auto& compile_failure = o.build_failures[1];
@@ -131,6 +133,7 @@ TEST(Overview, FailedBuildsAreListedWithTheirMessagesAfterTheFunctionIsGone) {
   EXPECT_EQ(compile_failure.model, "arm7");
   EXPECT_EQ(compile_failure.function, "rnea");
   EXPECT_TRUE(compile_failure.interpreter_serves);
+  EXPECT_EQ(compile_failure.stage, "compile");
   EXPECT_NE(compile_failure.message.find("simulated failure"), std::string::npos) << compile_failure.message;
   EXPECT_GT(compile_failure.unix_seconds, 1.7e9);
   const auto* entry = functionIn(o, f.function_id);

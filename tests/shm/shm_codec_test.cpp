@@ -88,6 +88,9 @@ TEST(ShmCodec, GetFunction) {
 
 TEST(ShmCodec, ListFunctionsReleaseHealthRequests) {
   EXPECT_EQ(roundTrip(rpc::ListFunctionsRequest{"m"}).model_id, "m");
+  const auto paged = roundTrip(rpc::ListFunctionsRequest{"m", 50, "page-7"});
+  EXPECT_EQ(paged.page_size, 50u);
+  EXPECT_EQ(paged.page_token, "page-7");
   EXPECT_EQ(roundTrip(rpc::ReleaseRequest{"id-1"}).id, "id-1");
   EXPECT_TRUE(roundTrip(rpc::HealthRequest{true}).verbose);
   EXPECT_EQ(roundTrip(rpc::ReleaseReply{5}).references_left, 5u);
@@ -95,7 +98,11 @@ TEST(ShmCodec, ListFunctionsReleaseHealthRequests) {
   rpc::ListFunctionsReply rep;
   rep.functions = {{"f1", "m1", "rnea", rpc::FunctionState::Ready, true, 1ull << 40, ""},
                    {"f2", "m1", "aba", rpc::FunctionState::Failed, false, 0, "why"}};
+  rep.next_page_token = "17";
+  rep.total = 300;
   auto p = roundTrip(rep);
+  EXPECT_EQ(p.next_page_token, "17");
+  EXPECT_EQ(p.total, 300u);
   ASSERT_EQ(p.functions.size(), 2u);
   EXPECT_EQ(p.functions[0].evaluations, 1ull << 40);
   EXPECT_TRUE(p.functions[0].compiled);

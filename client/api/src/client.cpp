@@ -213,9 +213,9 @@ Function Client::functionFile(const ModelInfo& model, const std::filesystem::pat
 std::vector<rpc::FunctionSummary> Client::functions() {
   Impl& c = *impl_;
   if (!c.connection) throw ClientError(c.noServer());
-  rpc::ListFunctionsReply reply;
-  throwIfFailed(c.connection->listFunctions({}, reply, c.callOptions()));
-  return std::move(reply.functions);
+  std::vector<rpc::FunctionSummary> functions;
+  throwIfFailed(listAllFunctions(*c.connection, {}, functions, c.callOptions()));
+  return functions;
 }
 
 }  // namespace robodiff::client

@@ -77,9 +77,9 @@ Status Client::Impl::reregister(std::uint64_t seen_generation) {
 
 std::optional<rpc::FunctionSummary> Client::Impl::summary(const std::string& function_id) {
   if (!connection) return std::nullopt;
-  rpc::ListFunctionsReply reply;
-  if (!connection->listFunctions({}, reply, callOptions()).ok()) return std::nullopt;
-  for (rpc::FunctionSummary& f : reply.functions)
+  std::vector<rpc::FunctionSummary> functions;
+  if (!listAllFunctions(*connection, {}, functions, callOptions()).ok()) return std::nullopt;
+  for (rpc::FunctionSummary& f : functions)
     if (f.function_id == function_id) return std::move(f);
   return std::nullopt;
 }

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/language/bounded_text.hpp"
 #include "user_function_canonical.hpp"
 #include "user_function_parse.hpp"
 
@@ -64,6 +65,48 @@ std::vector<std::string> FunctionSpec::inputNames() const {
 
 namespace {
 
+// A value quoted in a message: its JSON, cut to a short prefix when long.
+std::string shown(const json& value) { return language::boundedText(value.dump()); }
+
+// Keys whose string values are names (frames, functions, kinds, ...), not expressions.
+bool holdsName(const std::string& key) {
+  static const std::set<std::string> keys = {"frame", "name", "function", "kind", "layout", "reference",
+                                             "optimization", "wrt"};
+  return keys.count(key) != 0;
+}
+
+// Refuses (SpecTooLarge) any key, and any name-holding string value, longer than
+// kMaxSpecNameBytes, before anything else reads them. Iterative: no recursion on depth.
+void checkNameLengths(const nlohmann::ordered_json& root, const std::string& source) {
+  struct Item {
+    const nlohmann::ordered_json* value;
+    std::string path;
+    bool is_name;  // a string here is a name
+  };
+  std::vector<Item> pending = {{&root, "", false}};
+  while (!pending.empty()) {
+    const Item item = std::move(pending.back());
+    pending.pop_back();
+    const nlohmann::ordered_json& value = *item.value;
+    if (value.is_string() && item.is_name && value.get_ref<const std::string&>().size() > kMaxSpecNameBytes)
+      throw SpecTooLarge(source + ": " + item.path + ": a name of " +
+                         std::to_string(value.get_ref<const std::string&>().size()) + " bytes, past the limit of " +
+                         std::to_string(kMaxSpecNameBytes) + " bytes for names in a spec");
+    if (value.is_object()) {
+      for (const auto& [key, child] : value.items()) {
+        if (key.size() > kMaxSpecNameBytes)
+          throw SpecTooLarge(source + ": " + (item.path.empty() ? "" : item.path + ": ") + "a key of " +
+                             std::to_string(key.size()) + " bytes, past the limit of " +
+                             std::to_string(kMaxSpecNameBytes) + " bytes for names in a spec");
+        pending.push_back({&child, item.path.empty() ? key : item.path + "." + key, holdsName(key)});
+      }
+    } else if (value.is_array()) {
+      for (std::size_t i = 0; i < value.size(); ++i)
+        pending.push_back({&value[i], item.path + "[" + std::to_string(i) + "]", item.is_name});
+    }
+  }
+}
+
 class Parser {
  public:
   explicit Parser(std::string source) : source_(std::move(source)) {}
@@ -89,21 +132,21 @@ class Parser {
     if (!output.contains("layout")) return Layout::Dense;
     const std::string layout = string(output["layout"], path + ".layout");
     if (layout == "sparse") return Layout::Sparse;
-    if (layout != "dense") fail(path + ".layout", "'" + layout + "' is neither dense nor sparse");
+    if (layout != "dense") fail(path + ".layout", language::quote(layout) + " is neither dense nor sparse");
     return Layout::Dense;
   }
 
   std::string string(const json& value, const std::string& path) const {
-    if (!value.is_string()) fail(path, value.dump() + " is not a string");
+    if (!value.is_string()) fail(path, shown(value) + " is not a string");
     return value.get<std::string>();
   }
 
   std::vector<double> numbers(const json& value, const std::string& path) const {
-    if (!value.is_array()) fail(path, value.dump() + " is not an array of numbers");
+    if (!value.is_array()) fail(path, shown(value) + " is not an array of numbers");
     std::vector<double> out;
     for (size_t i = 0; i < value.size(); ++i) {
       const std::string at = path + "[" + std::to_string(i) + "]";
-      if (!value[i].is_number()) fail(at, value[i].dump() + " is not a number");
+      if (!value[i].is_number()) fail(at, shown(value[i]) + " is not a number");
       double x = value[i].get<double>();
       if (!std::isfinite(x)) fail(at, "not a finite number");
       out.push_back(x);
@@ -123,11 +166,12 @@ class Parser {
       if (!known) {
         std::string list;
         for (const std::string& input : info.inputs) list += (list.empty() ? "" : ", ") + input;
-        fail(at, "'" + name + "' is not an input of " + info.name + " (its inputs: " + list + ")");
+        fail(at, language::quote(name) + " is not an input of " + info.name + " (its inputs: " + list + ")");
       }
-      if (spec.input(name).fixed) fail(at, "'" + name + "' is fixed; only variable inputs can be differentiated against");
+      if (spec.input(name).fixed)
+        fail(at, language::quote(name) + " is fixed; only variable inputs can be differentiated against");
       for (const std::string& seen : out)
-        if (seen == name) fail(at, "'" + name + "' is listed twice");
+        if (seen == name) fail(at, language::quote(name) + " is listed twice");
       out.push_back(name);
     }
     return out;
@@ -141,6 +185,7 @@ class Parser {
       fail("", std::string("not valid JSON: ") + e.what());
     }
     if (!ordered.is_object()) fail("", "a spec is a JSON object");
+    checkNameLengths(ordered, source_);
     if (detail::isUserFunctionJson(ordered)) return parseUser(ordered);
     const json root = json::parse(text);
     onlyKeys(root, "", {"function", "inputs", "outputs", "frame", "reference", "build"});
@@ -152,7 +197,7 @@ class Parser {
     const FunctionInfo* info = nullptr;
     for (const FunctionInfo& f : modelFunctions())
       if (name == f.name) info = &f;
-    if (!info) fail("function", "'" + name + "' is not a model function (one of: " + functionList() + ")");
+    if (!info) fail("function", language::quote(name) + " is not a model function (one of: " + functionList() + ")");
     spec.function = info->function;
 
     for (const std::string& input : info->inputs) spec.inputs.push_back({input, std::nullopt});
@@ -164,13 +209,13 @@ class Parser {
         InputSpec* target = nullptr;
         for (InputSpec& i : spec.inputs)
           if (i.name == key) target = &i;
-        if (!target) fail(path, "'" + key + "' is not an input of " + info->name);
+        if (!target) fail(path, language::quote(key) + " is not an input of " + info->name);
         if (value.is_string() && value.get<std::string>() == "variable") continue;
         if (value.is_object() && value.size() == 1 && value.contains("fixed")) {
           target->fixed = numbers(value["fixed"], path + ".fixed");
           continue;
         }
-        fail(path, value.dump() + " is neither \"variable\" nor {\"fixed\": [numbers]}");
+        fail(path, shown(value) + " is neither \"variable\" nor {\"fixed\": [numbers]}");
       }
     }
 
@@ -180,7 +225,7 @@ class Parser {
     for (size_t i = 0; i < outputs.size(); ++i) {
       const std::string path = "outputs[" + std::to_string(i) + "]";
       const json& o = outputs[i];
-      if (!o.is_object()) fail(path, o.dump() + " is not an object {\"kind\": ...}");
+      if (!o.is_object()) fail(path, shown(o) + " is not an object {\"kind\": ...}");
       if (!o.contains("kind")) fail(path + ".kind", "missing (value, jacobian or hessian)");
       const std::string kind = string(o["kind"], path + ".kind");
       OutputSpec out;
@@ -201,7 +246,7 @@ class Parser {
         if (o.contains("weights") && !(o["weights"].is_string() && o["weights"] == "input"))
           out.fixed_weights = numbers(o["weights"], path + ".weights");
       } else {
-        fail(path + ".kind", "'" + kind + "' is not an output kind (value, jacobian or hessian)");
+        fail(path + ".kind", language::quote(kind) + " is not an output kind (value, jacobian or hessian)");
       }
       spec.outputs.push_back(out);
     }
@@ -211,7 +256,7 @@ class Parser {
       spec.frame = string(root["frame"], "frame");
       if (spec.frame.empty()) fail("frame", "empty frame name");
     } else if (root.contains("frame")) {
-      fail("frame", root["frame"].dump() + " given, but " + info->name + " takes no frame");
+      fail("frame", shown(root["frame"]) + " given, but " + info->name + " takes no frame");
     }
     if (root.contains("reference")) {
       if (spec.function != ModelFunction::FrameJacobian)
@@ -245,11 +290,11 @@ class Parser {
         spec.build.optimization = string(b["optimization"], "build.optimization");
         const std::set<std::string> levels = {"O0", "O1", "O2", "O3"};
         if (!levels.count(spec.build.optimization))
-          fail("build.optimization", "'" + spec.build.optimization + "' is not one of O0, O1, O2, O3");
+          fail("build.optimization", language::quote(spec.build.optimization) + " is not one of O0, O1, O2, O3");
       }
       for (const char* flag : {"march_native", "fast_math"}) {
         if (!b.contains(flag)) continue;
-        if (!b[flag].is_boolean()) fail(std::string("build.") + flag, b[flag].dump() + " is not true or false");
+        if (!b[flag].is_boolean()) fail(std::string("build.") + flag, shown(b[flag]) + " is not true or false");
         (std::string(flag) == "march_native" ? spec.build.march_native : spec.build.fast_math) = b[flag].get<bool>();
       }
     }

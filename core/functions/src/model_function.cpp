@@ -1,6 +1,12 @@
 #include "robodiff/functions/model_function.hpp"
 
+#include "robodiff/language/bounded_text.hpp"
+#include "robodiff/language/suggest.hpp"
+
 namespace robodiff {
+namespace {
+constexpr std::size_t kFrameListBytes = 600;  // the frame list in an unknown-frame message
+}  // namespace
 
 std::pair<int, int> valueShape(const Model& model, ModelFunction function) {
   switch (function) {
@@ -23,10 +29,16 @@ int inputSize(const Model& model, const std::string& input) { return input == "q
 int resolveFrame(const Model& model, const FunctionSpec& spec) {
   if (!functionInfo(spec.function).needs_frame) return -1;
   if (std::optional<int> f = model.findFrame(spec.frame)) return *f;
-  std::string names;
-  for (const Frame& f : model.frames) names += (names.empty() ? "" : ", ") + f.name;
-  throw SpecError("frame: '" + spec.frame + "' is not a frame of " + (model.name.empty() ? "the model" : model.name) +
-                  " (frames: " + names + ")");
+  std::vector<std::string> names;
+  for (const Frame& f : model.frames) names.push_back(f.name);
+  std::string hint = language::didYouMean(spec.frame, names);
+  if (hint.empty()) {  // no close name: list the frames, the list itself bounded
+    std::string list;
+    for (const std::string& name : names) list += (list.empty() ? "" : ", ") + language::boundedText(name);
+    hint = " (frames: " + language::boundedText(list, kFrameListBytes) + ")";
+  }
+  throw SpecError("frame: " + language::quote(spec.frame) + " is not a frame of " +
+                  (model.name.empty() ? std::string("the model") : language::boundedText(model.name)) + hint);
 }
 
 }  // namespace robodiff

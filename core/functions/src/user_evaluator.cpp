@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "robodiff/language/parser.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/language/suggest.hpp"
 #include "robodiff/symbolic/configuration.hpp"
 #include "robodiff/symbolic/differentiation.hpp"
@@ -111,7 +112,7 @@ template <class S> Value<S> Evaluator<S>::eval(const Expr& e) {
       return v;
     }
     case ExprKind::String:
-      throw EvalError(e.column, "a string ('" + e.text.substr(0, 80) + "') only names a frame, a shape or a reference frame, as a primitive's argument");
+      throw EvalError(e.column, "a string (" + language::quote(e.text) + ") only names a frame, a shape or a reference frame, as a primitive's argument");
     case ExprKind::Name: return name(e);
     case ExprKind::Call: return call(e);
     case ExprKind::Unary: {
@@ -145,7 +146,7 @@ template <class S> Value<S> Evaluator<S>::name(const Expr& e) {
   std::vector<std::string> names = {"nq", "nv", "pi"};
   for (const auto& [n, _] : inputs_) names.push_back(n);
   for (const UserDefine& d : context_.function.defines) names.push_back(d.name);
-  throw EvalError(e.column, "unknown name '" + e.text.substr(0, 80) + "'" + language::didYouMean(e.text, names));
+  throw EvalError(e.column, "unknown name " + language::quote(e.text) + language::didYouMean(e.text, names));
 }
 
 template <class S> Value<S> Evaluator<S>::call(const Expr& e) {
@@ -164,7 +165,7 @@ template <class S> Value<S> Evaluator<S>::call(const Expr& e) {
   if (!findPrimitive(e.text) && std::find(math.begin(), math.end(), e.text) == math.end()) {
     std::vector<std::string> names = math;
     for (const PrimitiveSignature& s : primitiveSignatures()) names.push_back(s.name);
-    throw EvalError(column, "unknown function '" + e.text.substr(0, 80) + "'" + language::didYouMean(e.text, names));
+    throw EvalError(column, "unknown function " + language::quote(e.text) + language::didYouMean(e.text, names));
   }
   if (const PrimitiveSignature* signature = findPrimitive(e.text)) {
     std::vector<PrimitiveArg<S>> args;

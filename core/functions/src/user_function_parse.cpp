@@ -6,6 +6,7 @@
 #include <set>
 
 #include "robodiff/language/parser.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/language/suggest.hpp"
 
 namespace robodiff::detail {
@@ -22,11 +23,7 @@ bool isIdentifier(const std::string& s) {
 }
 
 // A short quote of a value for messages (a 10 MB string is not repeated whole).
-std::string quoted(const ordered_json& value) {
-  std::string text = value.dump();
-  if (text.size() > 80) text = text.substr(0, 77) + "...";
-  return text;
-}
+std::string quoted(const ordered_json& value) { return language::boundedText(value.dump()); }
 
 class UserParser {
  public:
@@ -140,7 +137,7 @@ class UserParser {
   }
 
   void newName(const std::string& name, const std::string& path, const std::set<std::string>& taken) const {
-    if (!isIdentifier(name)) fail(path, "'" + name.substr(0, 80) + "' is not a name (letters, digits, _)");
+    if (!isIdentifier(name)) fail(path, language::quote(name) + " is not a name (letters, digits, _)");
     if (kReservedNames.count(name)) fail(path, "'" + name + "' is reserved (nq, nv and pi are constants)");
     if (taken.count(name)) fail(path, "'" + name + "' is already an input or a define");
   }
@@ -198,7 +195,7 @@ class UserParser {
     if (!shapes.is_object()) fail("shapes", "must be an object of named shapes");
     for (const auto& [key, value] : shapes.items()) {
       const std::string path = "shapes." + key;
-      if (!isIdentifier(key)) fail(path, "'" + key.substr(0, 80) + "' is not a name");
+      if (!isIdentifier(key)) fail(path, language::quote(key) + " is not a name");
       if (!value.is_object()) fail(path, "must be {\"frame\": ..., \"sphere\"|\"capsule\": {...}}");
       onlyKeys(value, path, {"frame", "sphere", "capsule"});
       UserShape s;
@@ -236,7 +233,7 @@ class UserParser {
       const std::string at = path + "[" + std::to_string(i) + "]";
       const std::string name = string(value[i], at);
       const UserInput* in = f.input(name);
-      if (!in) fail(at, "'" + name.substr(0, 80) + "' is not an input" + language::didYouMean(name, variable));
+      if (!in) fail(at, language::quote(name) + " is not an input" + language::didYouMean(name, variable));
       if (in->kind == UserInput::Kind::Fixed) fail(at, "'" + name + "' is fixed; only variable inputs can be differentiated against");
       if (std::find(out.begin(), out.end(), name) != out.end()) fail(at, "'" + name + "' is listed twice");
       out.push_back(name);
@@ -249,7 +246,7 @@ class UserParser {
     const UserInput* in = f.input(name);
     std::vector<std::string> names;
     for (const UserInput& i : f.inputs) names.push_back(i.name);
-    if (!in) fail(path, "'" + name.substr(0, 80) + "' is not an input" + language::didYouMean(name, names));
+    if (!in) fail(path, language::quote(name) + " is not an input" + language::didYouMean(name, names));
     if (in->kind != UserInput::Kind::Vector) fail(path, "'" + name + "' must be a variable vector input (a size)");
     return name;
   }
@@ -275,11 +272,11 @@ class UserParser {
     for (const char* required : {"name", "kind", "of"})
       if (!o.contains(required)) fail(path + "." + required, "missing");
     out.name = string(o["name"], path + ".name");
-    if (!isIdentifier(out.name)) fail(path + ".name", "'" + out.name.substr(0, 80) + "' is not a name (letters, digits, _)");
+    if (!isIdentifier(out.name)) fail(path + ".name", language::quote(out.name) + " is not a name (letters, digits, _)");
     const std::string kind = string(o["kind"], path + ".kind");
     static const std::vector<std::string> kinds = {"value", "jacobian", "gradient", "hessian", "vjp"};
     const auto k = std::find(kinds.begin(), kinds.end(), kind);
-    if (k == kinds.end()) fail(path + ".kind", "'" + kind.substr(0, 80) + "' is not an output kind (value, jacobian, gradient, hessian, vjp)" + language::didYouMean(kind, kinds));
+    if (k == kinds.end()) fail(path + ".kind", language::quote(kind) + " is not an output kind (value, jacobian, gradient, hessian, vjp)" + language::didYouMean(kind, kinds));
     out.kind = static_cast<UserOutputKind>(k - kinds.begin());
     out.of = string(o["of"], path + ".of");
     out.of_expr = expression(out.of, path + ".of");
@@ -295,7 +292,7 @@ class UserParser {
     out.wrt = wrtList(o["wrt"], path + ".wrt", f);
     if (o.contains("layout")) {
       const std::string layout = string(o["layout"], path + ".layout");
-      if (layout != "dense" && layout != "sparse") fail(path + ".layout", "'" + layout.substr(0, 80) + "' is neither dense nor sparse");
+      if (layout != "dense" && layout != "sparse") fail(path + ".layout", language::quote(layout) + " is neither dense nor sparse");
       out.sparse = layout == "sparse";
     }
     if (o.contains("weights")) {

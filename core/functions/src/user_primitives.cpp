@@ -3,6 +3,7 @@
 #include "robodiff/dynamics/all.hpp"
 #include "robodiff/dynamics/lie_group.hpp"
 #include "robodiff/dynamics/shape_distance.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/language/suggest.hpp"
 #include "user_primitive_rules.hpp"
 
@@ -47,7 +48,7 @@ int resolveFrameName(const Model& model, const std::string& name, int column) {
   if (name == "world") return -1;
   std::vector<std::string> names = {"world"};
   for (const Frame& f : model.frames) names.push_back(f.name);
-  throw EvalError(column, "'" + name.substr(0, 80) + "' is not a frame of " + (model.name.empty() ? "the model" : model.name) +
+  throw EvalError(column, language::quote(name) + " is not a frame of " + (model.name.empty() ? std::string("the model") : language::boundedText(model.name)) +
                               language::didYouMean(name, names));
 }
 
@@ -86,14 +87,14 @@ void checkArguments(const PrimitiveContext& c, const PrimitiveSignature& sig, co
     if (kind == ArgKind::Shape && !c.function.shapes.count(a.text)) {
       std::vector<std::string> names;
       for (const auto& [name, _] : c.function.shapes) names.push_back(name);
-      throw EvalError(a.column, "'" + a.text.substr(0, 80) + "' is not a shape of the spec's \"shapes\"" +
+      throw EvalError(a.column, language::quote(a.text) + " is not a shape of the spec's \"shapes\"" +
                                     (names.empty() ? std::string(" (it has none)") : language::didYouMean(a.text, names)));
     }
     if (kind == ArgKind::Reference) {
       try {
         parseReferenceFrame(a.text);
       } catch (const std::invalid_argument&) {
-        throw EvalError(a.column, where + ": '" + a.text.substr(0, 80) + "' is not LOCAL, WORLD or LOCAL_WORLD_ALIGNED");
+        throw EvalError(a.column, where + ": " + language::quote(a.text) + " is not LOCAL, WORLD or LOCAL_WORLD_ALIGNED");
       }
     }
     if (kind == ArgKind::Velocity && (a.value.configuration || a.value.cols() != 1 || a.value.rows() != m.nv))

@@ -5,6 +5,8 @@
 #include <set>
 #include <utility>
 
+#include "robodiff/language/bounded_text.hpp"
+
 namespace robodiff::language {
 namespace {
 
@@ -73,7 +75,7 @@ std::string didYouMean(const std::string& name, const std::vector<std::string>& 
   const std::vector<std::string> names = closestNames(name, candidates);
   if (names.empty()) return "";
   std::string text = " (did you mean ";
-  for (std::size_t i = 0; i < names.size(); ++i) text += (i == 0 ? "'" : ", '") + names[i] + "'";
+  for (std::size_t i = 0; i < names.size(); ++i) text += (i == 0 ? "" : ", ") + quote(names[i]);
   return text + "?)";
 }
 

@@ -187,9 +187,13 @@ void fromWire(const robodiff_wire_EvaluateBatchRequest& in, rpc::EvaluateBatchRe
 
 void toWire(const rpc::ListFunctionsRequest& in, robodiff_wire_ListFunctionsRequest& out) {
   out.model_id = dupString(in.model_id);
+  out.page_size = in.page_size;
+  out.page_token = dupString(in.page_token);
 }
 void fromWire(const robodiff_wire_ListFunctionsRequest& in, rpc::ListFunctionsRequest& out) {
   out.model_id = toString(in.model_id);
+  out.page_size = in.page_size;
+  out.page_token = toString(in.page_token);
 }
 
 void toWire(const rpc::HealthRequest& in, robodiff_wire_HealthRequest& out) { out.verbose = in.verbose; }
@@ -282,6 +286,8 @@ void toWire(const rpc::ListFunctionsReply& in, robodiff_wire_ListFunctionsReply&
     o.evaluations = f.evaluations;
     o.message = dupString(f.message);
   });
+  out.next_page_token = dupString(in.next_page_token);
+  out.total = in.total;
 }
 void fromWire(const robodiff_wire_ListFunctionsReply& in, rpc::ListFunctionsReply& out) {
   mapFromWire(in.functions, out.functions, [](const robodiff_wire_FunctionSummary& f, rpc::FunctionSummary& o) {
@@ -293,6 +299,8 @@ void fromWire(const robodiff_wire_ListFunctionsReply& in, rpc::ListFunctionsRepl
     o.evaluations = f.evaluations;
     o.message = toString(f.message);
   });
+  out.next_page_token = toString(in.next_page_token);
+  out.total = in.total;
 }
 
 void toWire(const rpc::HealthReply& in, robodiff_wire_HealthReply& out) {

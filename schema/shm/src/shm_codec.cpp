@@ -392,11 +392,15 @@ Status decode(std::span<const std::byte> body, rpc::GetFunctionReply& m) {
 std::vector<std::byte> encode(const rpc::ListFunctionsRequest& m) {
   Writer w;
   w.str(m.model_id);
+  w.u32(m.page_size);
+  w.str(m.page_token);
   return w.take();
 }
 Status decode(std::span<const std::byte> body, rpc::ListFunctionsRequest& m) {
   Reader r(body);
   m.model_id = r.str("model_id");
+  m.page_size = r.u32("page_size");
+  m.page_token = r.str("page_token");
   return r.finish("ListFunctionsRequest");
 }
 
@@ -411,6 +415,8 @@ std::vector<std::byte> encode(const rpc::ListFunctionsReply& m) {
     w.u64(f.evaluations);
     w.str(f.message);
   });
+  w.str(m.next_page_token);
+  w.u32(m.total);
   return w.take();
 }
 Status decode(std::span<const std::byte> body, rpc::ListFunctionsReply& m) {
@@ -425,6 +431,8 @@ Status decode(std::span<const std::byte> body, rpc::ListFunctionsReply& m) {
     f.evaluations = r.u64("functions.evaluations");
     f.message = r.str("functions.message");
   }
+  m.next_page_token = r.str("next_page_token");
+  m.total = r.u32("total");
   return r.finish("ListFunctionsReply");
 }
 

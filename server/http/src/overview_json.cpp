@@ -81,6 +81,7 @@ std::string overviewJson(const ServiceOverview& o) {
                                      {"model", f.model},
                                      {"function", f.function},
                                      {"message", f.message},
+                                     {"stage", f.stage},
                                      {"interpreter_serves", f.interpreter_serves}});
 
   const std::uint64_t lookups = m.cache_hits + m.cache_misses;

@@ -6,6 +6,8 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "robodiff/language/bounded_text.hpp"
+
 namespace robodiff::server {
 namespace {
 
@@ -71,7 +73,10 @@ void appendValue(std::string& out, const LogField& field, bool json) {
       [&](const auto& v) {
         using T = std::decay_t<decltype(v)>;
         if constexpr (std::is_same_v<T, std::string_view>) {
-          json ? appendJsonString(out, v) : appendTextValue(out, v);
+          const bool cut = v.size() > kMaxLogValueBytes;
+          const std::string bounded = cut ? language::boundedText(v, kMaxLogValueBytes) : std::string();
+          const std::string_view shown = cut ? std::string_view(bounded) : v;
+          json ? appendJsonString(out, shown) : appendTextValue(out, shown);
         } else if constexpr (std::is_same_v<T, bool>) {
           out += v ? "true" : "false";
         } else if constexpr (std::is_same_v<T, double>) {
@@ -81,6 +86,26 @@ void appendValue(std::string& out, const LogField& field, bool json) {
         }
       },
       field.value);
+}
+
+// A line past kMaxLogLineBytes (many long fields): one that keeps the event, the start
+// of the line and its size, still one valid line of its format.
+std::string cutLine(const std::string& line, const std::string& ts, LogLevel level, std::string_view event,
+                    bool json) {
+  const std::string start = language::boundedText(line, kMaxLogLineBytes / 4);
+  std::string out;
+  if (json) {
+    out = "{\"ts\":\"" + ts + "\",\"level\":\"" + toString(level) + "\",\"event\":";
+    appendJsonString(out, event);
+    out += ",\"line_bytes\":" + std::to_string(line.size()) + ",\"cut_line\":";
+    appendJsonString(out, start);
+    return out + "}\n";
+  }
+  out = ts + ' ' + toString(level) + ' ';
+  out += event;
+  out += " line_bytes=" + std::to_string(line.size()) + " cut_line=";
+  appendJsonString(out, start);
+  return out + '\n';
 }
 
 }  // namespace
@@ -138,6 +163,7 @@ void Logger::log(LogLevel level, std::string_view event, std::initializer_list<L
     }
     line += '\n';
   }
+  if (line.size() > kMaxLogLineBytes) line = cutLine(line, ts, level, event, format_ == LogFormat::Json);
   std::lock_guard lock(mutex_);
   std::fwrite(line.data(), 1, line.size(), out_);
   std::fflush(out_);

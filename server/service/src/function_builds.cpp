@@ -6,6 +6,7 @@
 
 #include "robodiff/functions/function_builder.hpp"
 #include "robodiff/functions/function_library.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/symbolic/graph.hpp"
 #include "robodiff/workers/build_job.hpp"
 
@@ -24,12 +25,23 @@ workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
 
 }  // namespace
 
-FunctionBuilds::FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log)
+const char* toString(FailureStage stage) {
+  switch (stage) {
+    case FailureStage::InvalidSpec: return "invalid-spec";
+    case FailureStage::Trace: return "trace";
+    case FailureStage::Compile: return "compile";
+  }
+  return "unknown";
+}
+
+FunctionBuilds::FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log,
+                               FailedCallback failed)
     : settings_(std::move(settings)),
       cache_(cache),
       pool_(pool),
       builder_(cache, pool, builderOptions(settings_)),
       log_(log),
+      failed_(std::move(failed)),
       compile_queue_("compile", std::max(1u, settings_.compile_threads), 0,
                      [this](const std::string& what) {
                        log_.error("internal_error", {{"message", what}});
@@ -41,9 +53,10 @@ FunctionBuilds::FunctionBuilds(BuildSettings settings, cache::Cache& cache, work
 FunctionBuilds::~FunctionBuilds() { stop(); }
 
 void FunctionBuilds::start(std::shared_ptr<FunctionEntry> function) {
-  FunctionEntry& f = *function;
   if (!trace_queue_.post([this, function] { trace(function); }))
-    f.fail(StatusCode::Unavailable, "the server is stopping; function " + f.id() + " was not built");
+    failFunction(function,
+                 {StatusCode::Unavailable, "the server is stopping; function " + function->id() + " was not built"},
+                 FailureStage::Trace);
 }
 
 void FunctionBuilds::stop() {
@@ -79,27 +92,52 @@ std::vector<BuildFailureRecord> FunctionBuilds::recentFailures() const {
   return {failures_.begin(), failures_.end()};
 }
 
-void FunctionBuilds::keepFailure(const FunctionEntry& function, const std::string& message, bool interpreter_serves) {
+std::optional<Status> FunctionBuilds::recentInvalidSpec(std::string_view function_id) const {
+  std::lock_guard lock(failures_mutex_);
+  for (const BuildFailureRecord& r : failures_)
+    if (r.stage == FailureStage::InvalidSpec && r.function_id == function_id) return r.status;
+  return std::nullopt;
+}
+
+void FunctionBuilds::keepFailure(const FunctionEntry& function, const std::string& message, FailureStage stage,
+                                 Status status) {
   BuildFailureRecord r;
   r.when = std::chrono::system_clock::now();
   r.function_id = function.id();
-  r.model = function.model().displayName();
-  r.function = function.functionName();
-  r.message = message;
-  r.interpreter_serves = interpreter_serves;
+  r.model = language::boundedText(function.model().displayName());
+  r.function = language::boundedText(function.functionName());
+  r.message = language::boundedText(message, kFailureMessageBytes);
+  r.stage = stage;
+  status.message = language::boundedText(status.message, kFailureMessageBytes);
+  r.status = std::move(status);
   std::lock_guard lock(failures_mutex_);
   failures_.push_front(std::move(r));
   if (failures_.size() > kKeptFailures) failures_.pop_back();
 }
 
+void FunctionBuilds::failFunction(const std::shared_ptr<FunctionEntry>& function, Status status, FailureStage stage) {
+  FunctionEntry& f = *function;
+  status.message = language::boundedText(status.message, kFailureMessageBytes);
+  log_.warn("function_failed", {{"function_id", f.id()},
+                                {"stage", toString(stage)},
+                                {"code", toString(status.code)},
+                                {"message", status.message}});
+  keepFailure(f, status.message, stage, status);
+  if (failed_) failed_(function);  // unloaded before waiters wake: none sees it still loaded
+  f.fail(status.code, status.message);
+}
+
 void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   FunctionEntry& f = *function;
   if (stopping_) {
-    f.fail(StatusCode::Unavailable, "the server stopped before function " + f.id() + " was built; retry after restart");
+    failFunction(function,
+                 {StatusCode::Unavailable,
+                  "the server stopped before function " + f.id() + " was built; retry after restart"},
+                 FailureStage::Trace);
     return;
   }
   if (f.unloaded()) {
-    f.fail(StatusCode::Cancelled, "function " + f.id() + " was released before it was built");
+    f.fail(StatusCode::Cancelled, "function " + f.id() + " was released before it was built");  // already unloaded
     return;
   }
   const Model& model = *f.model().model;
@@ -124,6 +162,7 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   std::shared_ptr<const Evaluator> evaluator;
   std::size_t instructions = 0, nodes = 0;
   Status failure;
+  FailureStage stage = FailureStage::Trace;
   try {
     // The builder's defaults, as the build workers use them: same graph, same layout.
     const BuiltFunction built = buildFunction(model, f.spec(), LibraryOptions{}.builder);
@@ -134,21 +173,21 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
     evaluator = std::make_shared<const InterpretedEvaluator>(std::move(layout), std::move(interpreter));
   } catch (const SpecTooLarge& e) {
     failure = {StatusCode::ResourceExhausted, e.what()};
+    stage = FailureStage::InvalidSpec;
   } catch (const SpecError& e) {
     failure = {StatusCode::InvalidArgument, e.what()};
+    stage = FailureStage::InvalidSpec;
   } catch (const symbolic::GraphTooLarge& e) {
     failure = {StatusCode::ResourceExhausted, std::string("the function is too large to build: ") + e.what() +
                                                   "; ask for fewer outputs or derivatives, or use a smaller robot"};
+    stage = FailureStage::InvalidSpec;
   } catch (const std::bad_alloc&) {
     failure = {StatusCode::ResourceExhausted, "out of memory while tracing function " + f.id()};
   } catch (const std::exception& e) {
     failure = {StatusCode::Internal, std::string("tracing failed: ") + e.what()};
   }
   if (!failure.ok()) {
-    log_.warn("function_failed",
-              {{"function_id", f.id()}, {"code", toString(failure.code)}, {"message", failure.message}});
-    keepFailure(f, failure.message, false);
-    f.fail(failure.code, failure.message);
+    failFunction(function, std::move(failure), stage);
     return;
   }
   // Counted as queued before it is READY: whoever sees it READY sees its build coming.
@@ -263,11 +302,12 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
   log_.info("function_swapped", {{"function_id", f.id()}, {"from", "interpreter"}, {"to", "compiled"}});
 }
 
-void FunctionBuilds::buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message) {
+void FunctionBuilds::buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& full_message) {
   FunctionEntry& f = *function;
+  const std::string message = language::boundedText(full_message, kFailureMessageBytes);
   builds_failed_.fetch_add(1, std::memory_order_relaxed);
   f.setCompileStage(CompileStage::Failed);
-  keepFailure(f, message, true);
+  keepFailure(f, message, FailureStage::Compile, {});
   f.setMessage("building the library failed (the interpreter serves this function): " + message);
   log_.warn("build_failed", {{"function_id", f.id()}, {"function", f.functionName()}, {"message", message}});
 }

@@ -8,15 +8,20 @@
 //      on success it is loaded and swapped in, on failure the interpreter keeps serving
 //      and the failure is logged, counted and kept as the function's message.
 // stop() fails functions not traced yet (UNAVAILABLE), skips builds not started and
-// cancels the running ones.
+// cancels the running ones. A function that fails (never becomes READY) is handed to the
+// `failed` callback, which unloads it: a failed function holds no slot; the bounded list
+// of recent failures remembers it for the dashboard and for GetFunction's answer.
 
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "function_entry.hpp"
@@ -42,16 +47,29 @@ struct BuildFigures {
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
 };
 
+// Where a function failed.
+enum class FailureStage : std::uint8_t {
+  InvalidSpec,  // the spec never built: it does not fit the model (unknown frame, ...) or is too large
+  Trace,        // tracing failed for another reason (out of memory, stopping, internal)
+  Compile,      // only the library failed: the interpreter still serves the function
+};
+const char* toString(FailureStage stage);  // "invalid-spec" | "trace" | "compile"
+
 // A build that failed, kept for the dashboard after its function is gone.
 struct BuildFailureRecord {
   std::chrono::system_clock::time_point when;
-  std::string function_id, model, function, message;
-  bool interpreter_serves = false;  // only the library failed: the function still answers
+  std::string function_id, model, function, message;  // message: at most kFailureMessageBytes
+  FailureStage stage = FailureStage::Trace;
+  Status status;  // what GetFunction answered (not OK unless stage is Compile)
+  bool interpreter_serves() const { return stage == FailureStage::Compile; }
 };
 
 class FunctionBuilds {
  public:
-  FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log);
+  // Called with a function that failed (it never became READY), on a build thread.
+  using FailedCallback = std::function<void(const std::shared_ptr<FunctionEntry>&)>;
+  FunctionBuilds(BuildSettings settings, cache::Cache& cache, workers::WorkerPool& pool, Logger& log,
+                 FailedCallback failed = {});
   ~FunctionBuilds();  // stop()
   FunctionBuilds(const FunctionBuilds&) = delete;
   FunctionBuilds& operator=(const FunctionBuilds&) = delete;
@@ -63,7 +81,11 @@ class FunctionBuilds {
   BuildFigures figures() const;
   // The latest failures (tracing or compiling), newest first; at most kKeptFailures.
   std::vector<BuildFailureRecord> recentFailures() const;
-  static constexpr std::size_t kKeptFailures = 20;
+  // The answer kept for function `function_id` when its spec recently failed as invalid
+  // (the same spec fails the same way: GetFunction answers without tracing again).
+  std::optional<Status> recentInvalidSpec(std::string_view function_id) const;
+  static constexpr std::size_t kKeptFailures = 64;
+  static constexpr std::size_t kFailureMessageBytes = 1024;
 
  private:
   void trace(const std::shared_ptr<FunctionEntry>& function);
@@ -72,13 +94,16 @@ class FunctionBuilds {
   void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status);
   void buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message);
   void cancelRunningBuilds();
-  void keepFailure(const FunctionEntry& function, const std::string& message, bool interpreter_serves);
+  void keepFailure(const FunctionEntry& function, const std::string& message, FailureStage stage, Status status);
+  // Fails `function` (BUILDING -> FAILED), records and logs why, and hands it to failed_.
+  void failFunction(const std::shared_ptr<FunctionEntry>& function, Status status, FailureStage stage);
 
   BuildSettings settings_;
   cache::Cache& cache_;
   workers::WorkerPool& pool_;
   workers::CachedBuilder builder_;
   Logger& log_;
+  FailedCallback failed_;
   std::atomic<bool> stopping_{false};
 
   std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <mutex>
 
+#include "robodiff/language/bounded_text.hpp"
+
 namespace robodiff::server::detail {
 
 Status Registry::addModel(std::shared_ptr<ModelEntry> candidate, std::size_t max_models, Added& added) {
@@ -26,7 +28,7 @@ Status Registry::addFunction(std::string_view model_id, const std::string& funct
   std::unique_lock lock(mutex_);
   const auto model = models_.find(model_id);
   if (model == models_.end())
-    return {StatusCode::NotFound, "unknown model id " + std::string(model_id) +
+    return {StatusCode::NotFound, "unknown model id " + language::boundedText(model_id) +
                                       " (never loaded on this server, or released); call LoadModel first"};
   auto it = functions_.find(function_id);
   if (it == functions_.end()) {
@@ -57,40 +59,53 @@ std::shared_ptr<ModelEntry> Registry::findModel(std::string_view model_id) const
   return it == models_.end() ? nullptr : it->second;
 }
 
+void Registry::dropModelIfUnused(const std::string& model_id, Released& released) {
+  const auto m = models_.find(model_id);
+  if (m != models_.end() && m->second->references == 0 && m->second->functions == 0) {
+    released.model_unloaded = m->second;
+    models_.erase(m);
+  }
+}
+
+void Registry::unloadFunction(FunctionMap::iterator it, Released& released) {
+  const std::shared_ptr<FunctionEntry> function = it->second;
+  functions_.erase(it);
+  function->markUnloaded();
+  released.function_unloaded = function;
+  if (const auto m = models_.find(function->model().id); m != models_.end()) --m->second->functions;
+  dropModelIfUnused(function->model().id, released);
+}
+
+bool Registry::dropFailed(const std::shared_ptr<FunctionEntry>& function, Released& released) {
+  std::unique_lock lock(mutex_);
+  const auto it = functions_.find(function->id());
+  if (it == functions_.end() || it->second != function) return false;
+  released.was_function = true;
+  unloadFunction(it, released);
+  return true;
+}
+
 Status Registry::release(std::string_view id, Released& released) {
   std::unique_lock lock(mutex_);
-  // A model no longer referenced, nor used by a function, goes. Caller holds the lock.
-  auto dropModelIfUnused = [&](const std::string& model_id) {
-    const auto m = models_.find(model_id);
-    if (m != models_.end() && m->second->references == 0 && m->second->functions == 0) {
-      released.model_unloaded = m->second;
-      models_.erase(m);
-    }
-  };
   if (const auto f = functions_.find(id); f != functions_.end()) {
     released.was_function = true;
     std::shared_ptr<FunctionEntry> function = f->second;
     released.references_left = --function->references;
-    if (function->references == 0) {
-      functions_.erase(f);
-      function->markUnloaded();
-      released.function_unloaded = function;
-      if (const auto m = models_.find(function->model().id); m != models_.end()) --m->second->functions;
-      dropModelIfUnused(function->model().id);
-    }
+    if (function->references == 0) unloadFunction(f, released);
     return {};
   }
   if (const auto m = models_.find(id); m != models_.end()) {
     if (m->second->references == 0)
-      return {StatusCode::NotFound, "model " + std::string(id) + " has no references left to release (" +
+      return {StatusCode::NotFound, "model " + language::boundedText(id) + " has no references left to release (" +
                                         std::to_string(m->second->functions) +
                                         " loaded functions keep it loaded until they are released)"};
     released.references_left = --m->second->references;
-    dropModelIfUnused(m->second->id);
+    dropModelIfUnused(m->second->id, released);
     return {};
   }
-  return {StatusCode::NotFound, "unknown id " + std::string(id) +
-                                    ": no model or function with this id is loaded (never loaded, or released)"};
+  return {StatusCode::NotFound, "unknown id " + language::boundedText(id) +
+                                    ": no model or function with this id is loaded (never loaded, released, or a function that "
+                                    "failed to build: those are unloaded at once)"};
 }
 
 std::vector<std::shared_ptr<FunctionEntry>> Registry::functions(std::optional<std::string_view> model_id) const {

@@ -57,6 +57,10 @@ class Registry {
   // NOT_FOUND for an id that is not loaded or has no references left.
   Status release(std::string_view id, Released& released);
 
+  // Unloads `function` if it is the one loaded under its id (a function that failed:
+  // it holds no slot, whatever references clients took). True when it was unloaded.
+  bool dropFailed(const std::shared_ptr<FunctionEntry>& function, Released& released);
+
   // Loaded functions in order of creation; those of one model when model_id is set.
   std::vector<std::shared_ptr<FunctionEntry>> functions(std::optional<std::string_view> model_id = std::nullopt) const;
   // Snapshots with the counts the mutex guards (for the dashboard).
@@ -74,9 +78,15 @@ class Registry {
   std::size_t functionCount() const;
 
  private:
+  using FunctionMap = std::unordered_map<std::string, std::shared_ptr<FunctionEntry>, StringHash, std::equal_to<>>;
+  // Both with mutex_ held: a model no longer referenced nor used by a function goes;
+  // a function goes (and its model, when that was the last use).
+  void dropModelIfUnused(const std::string& model_id, Released& released);
+  void unloadFunction(FunctionMap::iterator it, Released& released);
+
   mutable std::shared_mutex mutex_;
   std::unordered_map<std::string, std::shared_ptr<ModelEntry>, StringHash, std::equal_to<>> models_;
-  std::unordered_map<std::string, std::shared_ptr<FunctionEntry>, StringHash, std::equal_to<>> functions_;
+  FunctionMap functions_;
   std::uint64_t next_sequence_ = 0;
 };
 

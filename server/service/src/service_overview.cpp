@@ -106,7 +106,8 @@ ServiceOverview Service::overview(std::size_t max_jobs) const {
     out.model = r.model;
     out.function = r.function;
     out.message = r.message;
-    out.interpreter_serves = r.interpreter_serves;
+    out.stage = detail::toString(r.stage);
+    out.interpreter_serves = r.interpreter_serves();
     o.build_failures.push_back(std::move(out));
   }
 

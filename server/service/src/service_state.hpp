@@ -22,6 +22,8 @@ namespace robodiff::server {
 
 struct Service::State {
   State(ServiceOptions options, Logger& log);
+  // A function that failed is unloaded at once: it holds no slot (FunctionBuilds' callback).
+  void unloadFailed(const std::shared_ptr<detail::FunctionEntry>& function);
 
   ServiceOptions options;
   Logger& log;
@@ -58,6 +60,8 @@ namespace detail {
 inline constexpr const char* kShuttingDown =
     "robodiffd is shutting down (SIGTERM); retry against another server or after restart";
 Status deadlineExceeded(const CallContext& ctx, const char* method);
+// The most of an error message a reply carries (a message quoting client input is cut).
+inline constexpr std::size_t kMaxErrorBytes = 1024;
 }  // namespace detail
 
 }  // namespace robodiff::server

@@ -132,8 +132,15 @@ struct EvaluateBatchReply {
 
 // ---- ListFunctions ------------------------------------------------------------------
 
+// Paged: a reply holds at most page_size functions (the server caps it at
+// kMaxListFunctionsPage, and at a byte budget so that a reply fits one shm chunk or DDS
+// sample); next_page_token asks for the next page (client::listAllFunctions follows it).
+inline constexpr std::uint32_t kMaxListFunctionsPage = 200;
+
 struct ListFunctionsRequest {
   std::string model_id;                // empty = all
+  std::uint32_t page_size = 0;         // 0: kMaxListFunctionsPage
+  std::string page_token;              // empty: the first page; else an earlier reply's next_page_token
 };
 
 struct FunctionSummary {
@@ -147,7 +154,9 @@ struct FunctionSummary {
 };
 
 struct ListFunctionsReply {
-  std::vector<FunctionSummary> functions;
+  std::vector<FunctionSummary> functions;  // in order of creation
+  std::string next_page_token;         // empty: this was the last page
+  std::uint32_t total = 0;             // functions listed over all pages (when this page was made)
 };
 
 // ---- Release ------------------------------------------------------------------------

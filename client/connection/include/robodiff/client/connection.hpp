@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "robodiff/schema/messages.hpp"
 
@@ -68,6 +69,11 @@ class Connection {
   virtual Status evaluateBatch(std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
                                std::span<double> outputs, CallOptions options = {}) = 0;
 };
+
+// ListFunctions page after page (from request.page_token, usually empty) until the last:
+// every function in `functions`, in order of creation. The first failing page's status.
+Status listAllFunctions(Connection& connection, const rpc::ListFunctionsRequest& request,
+                        std::vector<rpc::FunctionSummary>& functions, CallOptions options = {});
 
 // "<host>:<pid>:<8 random hex digits>".
 std::string defaultClientId();

@@ -5,6 +5,7 @@
 // holds a documented spec for each function.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -89,6 +90,10 @@ class SpecTooLarge : public SpecError {
  public:
   using SpecError::SpecError;
 };
+
+// The longest key or name (frame, function, output kind, ...) a spec may hold; past it
+// parseFunctionSpec throws SpecTooLarge before the name is used or quoted anywhere.
+inline constexpr std::size_t kMaxSpecNameBytes = 256;
 
 FunctionSpec parseFunctionSpec(const std::string& json_text, const std::string& source = "<spec>");
 FunctionSpec loadFunctionSpec(const std::string& path);

@@ -2,8 +2,11 @@
 // Structured logs: one line per event on a stream (stderr by default), as JSON objects
 // ({"ts":"2026-11-22T05:24:25.123Z","level":"info","event":"model_loaded","model_id":"...",...})
 // or as text (2026-11-22T05:24:25.123Z info model_loaded model_id=... nq=7). Thread-safe:
-// each line is written whole.
+// each line is written whole. Bounded: a string value past kMaxLogValueBytes is cut to a
+// prefix and its size; a line still past kMaxLogLineBytes is replaced by one that keeps
+// its start (as the "cut_line" string) and its size.
 
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <initializer_list>
@@ -15,6 +18,8 @@
 namespace robodiff::server {
 
 enum class LogLevel { Debug, Info, Warn, Error };
+inline constexpr std::size_t kMaxLogValueBytes = 2048;
+inline constexpr std::size_t kMaxLogLineBytes = 8192;
 enum class LogFormat { Json, Text };
 const char* toString(LogLevel level);
 // "debug" | "info" | "warn" | "error" ; throws std::invalid_argument naming the value.
