@@ -22,6 +22,9 @@ if [ ! -f "$robot" ]; then
   robot_name="arm7, the project's own 7-joint arm (../shared/robots is absent here: no Panda)"
 fi
 log="${ROBODIFF_RUN_LOG:-${1:-build}/run-robodiffd.log}"
+# DDS on this host only unless CYCLONEDDS_URI says otherwise: robodiffd serves open
+# (unauthenticated) DDS only on loopback (deploy/security.md).
+export CYCLONEDDS_URI="${CYCLONEDDS_URI:-file://$PWD/deploy/cyclonedds-loopback.xml}"
 daemon=""
 
 # Stops robodiffd (SIGTERM: it drains, then exits) and reports how it ended.

@@ -14,6 +14,7 @@ void addCheckCommand(CLI::App& app);     // check_command.cpp
 void addBenchCommand(CLI::App& app);     // bench_command.cpp
 void addWarmupCommand(CLI::App& app);    // warmup_command.cpp
 void addCacheCommand(CLI::App& app);     // cache_command.cpp
+void addSecurityCommand(CLI::App& app);  // security_command.cpp (DDS Security keystore)
 // Batch work (batch/): trajectories, identification, trajectory optimisation.
 void addTrajectoryCommand(CLI::App& app);  // trajectory_command.cpp
 void addIdentifyCommand(CLI::App& app);    // identify_command.cpp

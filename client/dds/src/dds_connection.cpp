@@ -2,6 +2,7 @@
 #include "robodiff/client/dds_connection.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -27,6 +28,18 @@ std::string seconds(Clock::duration d) {
   return text;
 }
 
+// The options' identity, else ROBODIFF_DDS_SECURITY's, else none.
+dds_codec::DdsSecurity securityOf(const DdsConnectionOptions& options) {
+  if (options.security.enabled()) return options.security;
+  const char* spec = std::getenv("ROBODIFF_DDS_SECURITY");
+  if (spec == nullptr || *spec == '\0') return {};
+  try {
+    return dds_codec::securityFromSpec(spec);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("ROBODIFF_DDS_SECURITY: ") + e.what());
+  }
+}
+
 }  // namespace
 
 DdsConnection::DdsConnection(DdsConnectionOptions options)
@@ -34,7 +47,8 @@ DdsConnection::DdsConnection(DdsConnectionOptions options)
   client_id_ = options_.connection.client_id.empty() ? defaultClientId() : options_.connection.client_id;
   endpoints_ = std::make_unique<dds_codec::DdsEndpoints>(options_.domain_id, options_.service_name,
                                                          dds_codec::DdsEndpoints::Side::Client,
-                                                         std::chrono::seconds(1), options_.lease);
+                                                         std::chrono::seconds(1), options_.lease,
+                                                         securityOf(options_));
   guard_ = dds_create_guardcondition(endpoints_->participant());
   if (guard_ < 0) throw std::runtime_error(dds_codec::ddsError("dds_create_guardcondition", guard_));
   // The status conditions that report a server (dis)appearing.

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "robodiff.h"
+#include "robodiff/schema/dds_domain.hpp"
 
 namespace robodiff::dds_codec {
 
@@ -15,21 +16,34 @@ std::string ddsError(std::string_view call, dds_return_t code) {
 }
 
 DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Side side,
-                           std::chrono::milliseconds writer_blocking, std::chrono::milliseconds lease) {
+                           std::chrono::milliseconds writer_blocking, std::chrono::milliseconds lease,
+                           const DdsSecurity& security) {
   const std::string where = [&] {
     return domain_id == kDefaultDomain ? std::string("the default DDS domain")
                                        : "DDS domain " + std::to_string(domain_id);
   }();
-  dds_qos_t* participant_qos = nullptr;
-  if (lease.count() > 0) {
-    participant_qos = dds_create_qos();
-    dds_qset_liveliness(participant_qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(lease.count()));
+  dds_qos_t* participant_qos = dds_create_qos();
+  if (lease.count() > 0) dds_qset_liveliness(participant_qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(lease.count()));
+  try {
+    if (security.enabled()) applySecurity(participant_qos, security);
+  } catch (...) {
+    dds_delete_qos(participant_qos);
+    throw;
+  }
+  try {
+    domain_id = prepareDomain(domain_id);
+  } catch (...) {
+    dds_delete_qos(participant_qos);
+    throw;
   }
   participant_ = dds_create_participant(domain_id, participant_qos, nullptr);
-  if (participant_qos) dds_delete_qos(participant_qos);
+  dds_delete_qos(participant_qos);
   if (participant_ < 0)
     throw std::runtime_error(ddsError("dds_create_participant", participant_) + " on " + where +
-                             " (check CYCLONEDDS_URI)");
+                             (security.enabled() ? " with DDS security (" + security.describe() +
+                                                       "): a certificate, key, governance or permissions file "
+                                                       "was refused (expired, tampered, or signed by another CA?)"
+                                                 : std::string(" (check CYCLONEDDS_URI)")));
   dds_domainid_t actual = 0;
   domain_id_ = dds_get_domainid(participant_, &actual) == DDS_RETCODE_OK ? actual : domain_id;
 

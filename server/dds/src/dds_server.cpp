@@ -75,7 +75,8 @@ void DdsServer::start() {
   if (c.endpoints) throw std::logic_error("DdsServer::start() called twice");
   c.endpoints = std::make_unique<dds_codec::DdsEndpoints>(c.options.domain_id, c.options.service_name,
                                                           dds_codec::DdsEndpoints::Side::Server,
-                                                          c.options.write_blocking, c.options.lease);
+                                                          c.options.write_blocking, c.options.lease,
+                                                          c.options.security);
   c.guard = dds_create_guardcondition(c.endpoints->participant());
   if (c.guard < 0) {
     c.endpoints.reset();
@@ -86,7 +87,10 @@ void DdsServer::start() {
   c.log.info("dds_server_started", {{"domain", c.endpoints->domainId()},
                                     {"request_topic", c.endpoints->readerTopic()},
                                     {"reply_topic", c.endpoints->writerTopic()},
-                                    {"server_instance_id", c.service.instanceId()}});
+                                    {"server_instance_id", c.service.instanceId()},
+                                    {"security", c.options.security.enabled()
+                                                     ? "DDS Security, " + c.options.security.describe()
+                                                     : std::string("open (unauthenticated)")}});
 }
 
 void DdsServer::stopAccepting() { core_->accepting = false; }

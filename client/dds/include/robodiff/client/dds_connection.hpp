@@ -52,6 +52,9 @@ struct DdsConnectionOptions {
   // does not mean the server sees us yet, and a request or reply sent before it does is
   // lost. Any reply proves both directions.
   std::chrono::milliseconds probe_timeout = std::chrono::milliseconds(250);
+  // DDS Security identity (dds_codec::keystoreIdentity). None: the environment variable
+  // ROBODIFF_DDS_SECURITY=<keystore>/<identity> names it, else the participant is open.
+  dds_codec::DdsSecurity security;
 };
 
 class DdsConnection final : public Connection {

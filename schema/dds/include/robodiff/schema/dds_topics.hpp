@@ -11,9 +11,12 @@
 #include <string>
 #include <string_view>
 
+#include "robodiff/schema/dds_security.hpp"
+
 namespace robodiff::dds_codec {
 
-// DDS_DOMAIN_DEFAULT: the domain that CYCLONEDDS_URI configures (0 unless it says otherwise).
+// DDS_DOMAIN_DEFAULT: the domain that CYCLONEDDS_URI configures (0 unless it says otherwise;
+// without CYCLONEDDS_URI, domain 0 on loopback: dds_domain.hpp).
 inline constexpr std::uint32_t kDefaultDomain = 0xFFFFFFFFu;
 inline constexpr std::string_view kDefaultServiceName = "robodiff";
 
@@ -32,9 +35,10 @@ class DdsEndpoints {
   // writer_blocking: how long dds_write may block when the writer's history is full.
   // lease: the participant's lease duration (how soon peers notice this process died);
   // 0 keeps the configuration's (Discovery/LeaseDuration, 10 s by default).
+  // security: DDS Security identity of the participant (none: an open participant).
   DdsEndpoints(std::uint32_t domain_id, std::string_view service, Side side,
                std::chrono::milliseconds writer_blocking = std::chrono::seconds(1),
-               std::chrono::milliseconds lease = std::chrono::milliseconds(0));
+               std::chrono::milliseconds lease = std::chrono::milliseconds(0), const DdsSecurity& security = {});
   ~DdsEndpoints();
   DdsEndpoints(const DdsEndpoints&) = delete;
   DdsEndpoints& operator=(const DdsEndpoints&) = delete;

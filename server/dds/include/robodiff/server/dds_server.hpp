@@ -40,6 +40,9 @@ struct DdsServerOptions {
   // saying goodbye (crash, SIGKILL) and fail their pending calls. 0: the configuration's
   // Discovery/LeaseDuration (10 s by default). A clean stop() is seen at once either way.
   std::chrono::milliseconds lease = std::chrono::seconds(1);
+  // DDS Security identity (dds_codec::keystoreIdentity); none: an open participant that
+  // any process reaching the domain may call.
+  dds_codec::DdsSecurity security;
 };
 
 class DdsServer {
