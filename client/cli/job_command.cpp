@@ -157,8 +157,8 @@ void addJobCommand(CLI::App& app) {
   CLI::App* sub = job->add_subcommand("submit", "Submit a job (SubmitJob); prints its id, or with --wait its result");
   sub->add_option("kind", s->kind, "trajectory | identify | trajopt")->required();
   auto* file = sub->add_option("--params", s->params_file,
-                               "A JSON file with the job's parameters (paths are on the server's host; "
-                               "schema/README.md lists them per kind)")
+                               "A JSON file with the job's parameters (paths are on the server's host, "
+                               "under its jobs.data_dirs; schema/README.md lists them per kind)")
                    ->type_name("FILE");
   sub->add_option("--params-json", s->params_text, "The parameters as JSON text")->type_name("JSON")->excludes(file);
   sub->add_flag("--wait", s->wait, "Wait for the job, showing its progress, and print its result");

@@ -75,7 +75,7 @@ TEST_F(HttpServerTest, UnknownPathIs404) {
 TEST_F(HttpServerTest, PostIs405WithAllow) {
   start();
   const HttpReply r =
-      rawRequest(port_, "POST /hello HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\n\r\nabc");
+      rawRequest(port_, "POST /hello HTTP/1.1\r\nHost: localhost\r\nContent-Length: 3\r\n\r\nabc");
   EXPECT_EQ(r.status, 405);
   EXPECT_EQ(r.header("Allow"), "GET, HEAD");
   EXPECT_EQ(httpGet(port_, "/hello", "DELETE").status, 405);
@@ -88,6 +88,32 @@ TEST_F(HttpServerTest, HeadHasTheHeadersAndNoBody) {
   EXPECT_EQ(head.status, 200);
   EXPECT_TRUE(head.body.empty()) << head.body;
   EXPECT_EQ(head.header("Content-Length"), get.header("Content-Length"));
+}
+
+// DNS rebinding: a page on evil.example whose name resolves to 127.0.0.1 makes the browser
+// send "Host: evil.example"; only names this host answers to are served.
+TEST_F(HttpServerTest, HostHeadersNamingOtherHostsAre421) {
+  HttpServerOptions options;
+  options.allowed_hosts = {"Robot1.lan"};
+  start(options);
+  auto withHost = [&](const std::string& host) {
+    return rawRequest(port_, "GET /hello HTTP/1.1\r\nHost: " + host + "\r\n\r\n");
+  };
+  for (const char* host : {"evil.example", "evil.example:" , "127.0.0.1.evil.example", "localhost.evil.example",
+                           "[::1", "", "robot2.lan"}) {
+    const HttpReply r = withHost(host);
+    EXPECT_EQ(r.status, 421) << host;
+    EXPECT_EQ(r.body.find("hello"), std::string::npos) << host;
+  }
+  EXPECT_NE(withHost("evil.example").head.find("421 Misdirected Request"), std::string::npos);
+  EXPECT_NE(withHost("evil.example").body.find("http.allowed_hosts"), std::string::npos);
+  for (const std::string& host : std::vector<std::string>{"127.0.0.1", "127.0.0.1:" + std::to_string(port_), "localhost", "LOCALHOST:80",
+                                 "localhost.", "[::1]:8080", "10.1.2.3", "robot1.lan", "ROBOT1.LAN:9464"}) {
+    const HttpReply r = withHost(host);
+    EXPECT_EQ(r.status, 200) << host;
+    EXPECT_EQ(r.body, "hello \n") << host;
+  }
+  EXPECT_EQ(rawRequest(port_, "GET /hello HTTP/1.0\r\n\r\n").status, 200);  // no Host: HTTP/1.0 tools
 }
 
 TEST_F(HttpServerTest, MalformedHeadsAre400) {

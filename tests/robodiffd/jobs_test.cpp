@@ -69,7 +69,9 @@ class Jobs : public ::testing::TestWithParam<std::string> {
   static void SetUpTestSuite() { signal(SIGTERM, SIG_IGN); }  // see end_to_end_test.cpp
 
   void startServer(std::vector<std::string> extra = {}) {
-    std::vector<std::string> args = {"--roudi", "external"};
+    // Jobs read the example robots and this test's files, and nothing else.
+    std::vector<std::string> args = {"--roudi", "external", "--set",
+                                     "jobs.data_dirs=" + (sourceDir() / "examples").string() + ":" + dir_.path().string()};
     args.insert(args.end(), extra.begin(), extra.end());
     server_ = std::make_unique<RobodiffdProcess>(dir_ / "cache", dir_ / ("robodiffd-" + std::to_string(++starts_) + ".log"),
                                                  args);
@@ -386,6 +388,46 @@ TEST_P(Jobs, IdentifyAndTrajoptJobs) {
   submit(*c, "trajopt", trajopt, &s);
   EXPECT_EQ(s.code, StatusCode::InvalidArgument);
   EXPECT_NE(s.message.find("outside its position limits"), std::string::npos) << s.message;
+}
+
+// A job runs as robodiffd's user: its parameters may only name files under jobs.data_dirs
+// (and earlier results), and a refusal says nothing about what lies outside.
+TEST_P(Jobs, FilesOutsideTheDataDirectoriesAreNeverRead) {
+  startServer();
+  auto c = connect();
+  TempDir outside;
+  const std::string secret = "TOP-SECRET-LINE-d41d8cd9";
+  std::ofstream(outside / "secret.urdf") << "<robot name=\"" << secret << "\"><link name=\"" << secret << "\"/>\n";
+  const Trajectory t = writeTrajectory(dir_, model_, 3);
+
+  auto refusal = [&](const std::string& field, const std::string& path) {
+    json params = trajectoryParams(t);
+    params.erase(field + "_json");  // "spec" counts only without "spec_json"
+    params[field] = path;
+    Status s;
+    const std::string id = submit(*c, "trajectory", params, &s);
+    EXPECT_EQ(s.code, StatusCode::InvalidArgument) << field << " " << path;
+    EXPECT_TRUE(id.empty());
+    EXPECT_EQ(s.message.find(secret), std::string::npos) << s.message;
+    return s.message;
+  };
+  // A file that exists and one that does not get the same answer, but for the path.
+  const std::string existing = refusal("urdf", (outside / "secret.urdf").string());
+  const std::string missing = refusal("urdf", (outside / "missing.urdf").string());
+  EXPECT_NE(existing.find("outside the directories"), std::string::npos) << existing;
+  EXPECT_EQ(existing.substr(existing.find("' is outside")), missing.substr(missing.find("' is outside")));
+  EXPECT_NE(refusal("data", "/etc/shadow").find("outside the directories"), std::string::npos);
+  EXPECT_NE(refusal("spec", "/proc/self/environ").find("outside the directories"), std::string::npos);
+
+  // Ways around the check: "..", a symbolic link inside pointing out, a relative path.
+  refusal("urdf", (dir_.path() / ".." / outside.path().filename() / "secret.urdf").string());
+  std::filesystem::create_symlink(outside / "secret.urdf", dir_ / "link.urdf");
+  EXPECT_NE(refusal("urdf", (dir_ / "link.urdf").string()).find("outside the directories"), std::string::npos);
+  EXPECT_NE(refusal("data", "trajectory.csv").find("absolute path"), std::string::npos);
+
+  // The server still serves a good job after all that.
+  const std::string id = submit(*c, "trajectory", trajectoryParams(t));
+  EXPECT_EQ(waitFinal(*c, id).state, rpc::JobState::Succeeded);
 }
 
 INSTANTIATE_TEST_SUITE_P(Transports, Jobs, ::testing::Values("iceoryx", "dds"),

@@ -124,6 +124,15 @@ json runBatch(const Channels& c, std::uint64_t id, const json& envelope) {
   robodiff::batch::BatchJobContext context;
   context.result_dir = request->value("result_dir", std::string());
   context.cache_dir = request->value("cache_dir", std::string());
+  // A service's job reads only under the directories it sends (absent: the caller runs
+  // the worker as itself, and the job reads anywhere).
+  if (const auto dirs = request->find("readable_dirs"); dirs != request->end()) {
+    if (!dirs->is_array()) return failure(id, "invalid_request", "\"readable_dirs\" must be an array of paths");
+    std::vector<std::filesystem::path> readable;
+    for (const json& d : *dirs)
+      if (d.is_string()) readable.emplace_back(d.get<std::string>());
+    context.files = robodiff::batch::FileAccess::under(std::move(readable));
+  }
   context.progress = [&](double fraction, const std::string& message) {
     reply(c, {{"id", id}, {"type", "progress"}, {"fraction", fraction}, {"message", message}});
   };

@@ -8,7 +8,7 @@ namespace {
 
 struct Kind {
   const char* name;
-  void (*validate)(const nlohmann::json& params);
+  void (*validate)(const nlohmann::json& params, const FileAccess& files);
   nlohmann::json (*run)(const nlohmann::json& params, const BatchJobContext& context);
 };
 
@@ -37,13 +37,13 @@ std::vector<std::string> batchJobKinds() {
   return names;
 }
 
-void validateBatchJob(const std::string& kind, const nlohmann::json& params) {
+void validateBatchJob(const std::string& kind, const nlohmann::json& params, const FileAccess& files) {
   if (!params.is_object()) throw JobParamsError("a job's parameters must be a JSON object");
-  kindOf(kind).validate(params);
+  kindOf(kind).validate(params, files);
 }
 
 nlohmann::json runBatchJob(const std::string& kind, const nlohmann::json& params, const BatchJobContext& context) {
-  validateBatchJob(kind, params);
+  validateBatchJob(kind, params, context.files);
   return kindOf(kind).run(params, context);
 }
 

@@ -27,9 +27,9 @@ void writeText(const std::filesystem::path& path, const std::string& text) {
 
 }  // namespace
 
-void validateIdentifyParams(const nlohmann::json& p) {
-  params::checkRobotFields(p);
-  params::existingFile(p, "data");
+void validateIdentifyParams(const nlohmann::json& p, const FileAccess& files) {
+  params::checkRobotFields(p, files);
+  params::existingFile(p, "data", files);
   const double holdout = params::optionalNumber(p, "holdout", 0.2);
   if (!(holdout >= 0 && holdout < 1)) throw JobParamsError("holdout " + std::to_string(holdout) + " is not in [0, 1)");
   params::optionalBool(p, "weighted", false);
@@ -41,8 +41,8 @@ nlohmann::json runIdentifyKind(const nlohmann::json& p, const BatchJobContext& c
   auto progress = [&](double fraction, const std::string& message) {
     if (context.progress) context.progress(fraction, message);
   };
-  const params::Robot robot = params::robot(p);
-  const std::filesystem::path data = params::existingFile(p, "data");
+  const params::Robot robot = params::robot(p, context.files);
+  const std::filesystem::path data = params::existingFile(p, "data", context.files);
   progress(0.0, "reading " + data.filename().string());
   const MeasuredSamples samples = readMeasuredSamples(data, robot.model);
 

@@ -7,15 +7,15 @@
 namespace robodiff::batch {
 
 // trajectory_job.cpp: a function evaluated along a trajectory file.
-void validateTrajectoryParams(const nlohmann::json& params);
+void validateTrajectoryParams(const nlohmann::json& params, const FileAccess& files);
 nlohmann::json runTrajectoryKind(const nlohmann::json& params, const BatchJobContext& context);
 
 // trajopt_job.cpp: a trajectory optimised with Ipopt.
-void validateTrajoptParams(const nlohmann::json& params);
+void validateTrajoptParams(const nlohmann::json& params, const FileAccess& files);
 nlohmann::json runTrajoptKind(const nlohmann::json& params, const BatchJobContext& context);
 
 // identify_job.cpp: inertial parameters from measured samples.
-void validateIdentifyParams(const nlohmann::json& params);
+void validateIdentifyParams(const nlohmann::json& params, const FileAccess& files);
 nlohmann::json runIdentifyKind(const nlohmann::json& params, const BatchJobContext& context);
 
 }  // namespace robodiff::batch

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "job_paths.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 
 namespace robodiff::batch::params {
@@ -46,8 +47,9 @@ double optionalNumber(const nlohmann::json& p, const char* field, double fallbac
   return it->get<double>();
 }
 
-std::filesystem::path existingFile(const nlohmann::json& p, const char* field) {
-  const std::filesystem::path path = requiredString(p, field);
+std::filesystem::path existingFile(const nlohmann::json& p, const char* field, const FileAccess& files) {
+  std::filesystem::path path = requiredString(p, field);
+  if (files.restricted) path = pathUnder(path, files.readable_dirs, field);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw JobParamsError(std::string(field) + ": no file " + path.string() + " on the host running the job");
@@ -71,46 +73,46 @@ Backend backend(const nlohmann::json& p) {
   }
 }
 
-void checkRobotFields(const nlohmann::json& p) {
+void checkRobotFields(const nlohmann::json& p, const FileAccess& files) {
   if (p.contains("urdf_text")) {
     requiredString(p, "urdf_text");
   } else {
-    existingFile(p, "urdf");
+    existingFile(p, "urdf", files);
   }
   optionalBool(p, "floating_base", false);
 }
 
-Robot robot(const nlohmann::json& p) {
-  checkRobotFields(p);
+Robot robot(const nlohmann::json& p, const FileAccess& files) {
+  checkRobotFields(p, files);
   Robot r;
   r.floating_base = optionalBool(p, "floating_base", false);
   if (p.contains("urdf_text")) {
     r.urdf_text = requiredString(p, "urdf_text");
     r.source = "urdf_text";
   } else {
-    r.source = existingFile(p, "urdf").string();
+    r.source = existingFile(p, "urdf", files).string();
     r.urdf_text = readText(r.source, "urdf");
   }
   r.model = loadUrdfString(r.urdf_text, r.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, r.source);
   return r;
 }
 
-void checkSpecFields(const nlohmann::json& p) {
+void checkSpecFields(const nlohmann::json& p, const FileAccess& files) {
   if (p.contains("spec_json")) {
     const auto& s = p["spec_json"];
     if (!s.is_object() && !s.is_string()) throw JobParamsError("spec_json must be a spec object or its JSON text");
   } else {
-    existingFile(p, "spec");
+    existingFile(p, "spec", files);
   }
 }
 
-FunctionSpec spec(const nlohmann::json& p) {
-  checkSpecFields(p);
+FunctionSpec spec(const nlohmann::json& p, const FileAccess& files) {
+  checkSpecFields(p, files);
   if (p.contains("spec_json")) {
     const auto& s = p["spec_json"];
     return parseFunctionSpec(s.is_string() ? s.get<std::string>() : s.dump(), "spec_json");
   }
-  const std::filesystem::path path = existingFile(p, "spec");
+  const std::filesystem::path path = existingFile(p, "spec", files);
   return parseFunctionSpec(readText(path, "spec"), path.string());
 }
 

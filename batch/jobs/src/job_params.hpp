@@ -18,8 +18,9 @@ std::string requiredString(const nlohmann::json& p, const char* field);
 std::optional<std::string> optionalString(const nlohmann::json& p, const char* field);
 bool optionalBool(const nlohmann::json& p, const char* field, bool fallback);
 double optionalNumber(const nlohmann::json& p, const char* field, double fallback);
-// A file that must exist and be readable (the path is on the host running the job).
-std::filesystem::path existingFile(const nlohmann::json& p, const char* field);
+// A file that must exist, and lie where `files` allows (the path is on the host running
+// the job): the path to open, symbolic links resolved when restricted.
+std::filesystem::path existingFile(const nlohmann::json& p, const char* field, const FileAccess& files);
 // A plain file name for a result inside the job's directory (no '/', not "." or "..").
 std::string resultFileName(const nlohmann::json& p, const char* field, const std::string& fallback);
 
@@ -32,11 +33,11 @@ struct Robot {
   bool floating_base = false;
   Model model;
 };
-Robot robot(const nlohmann::json& p);
-void checkRobotFields(const nlohmann::json& p);  // without loading it
+Robot robot(const nlohmann::json& p, const FileAccess& files);
+void checkRobotFields(const nlohmann::json& p, const FileAccess& files);  // without loading it
 
 // The function: "spec" (a path) or "spec_json" (an object or its text).
-FunctionSpec spec(const nlohmann::json& p);
-void checkSpecFields(const nlohmann::json& p);
+FunctionSpec spec(const nlohmann::json& p, const FileAccess& files);
+void checkSpecFields(const nlohmann::json& p, const FileAccess& files);
 
 }  // namespace robodiff::batch::params

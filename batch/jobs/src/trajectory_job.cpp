@@ -14,10 +14,10 @@
 
 namespace robodiff::batch {
 
-void validateTrajectoryParams(const nlohmann::json& p) {
-  params::checkRobotFields(p);
-  params::checkSpecFields(p);
-  params::existingFile(p, "data");
+void validateTrajectoryParams(const nlohmann::json& p, const FileAccess& files) {
+  params::checkRobotFields(p, files);
+  params::checkSpecFields(p, files);
+  params::existingFile(p, "data", files);
   params::resultFileName(p, "out", "outputs.csv");
   if (const auto format = params::optionalString(p, "format")) {
     try {
@@ -33,8 +33,8 @@ nlohmann::json runTrajectoryKind(const nlohmann::json& p, const BatchJobContext&
   auto progress = [&](double fraction, const std::string& message) {
     if (context.progress) context.progress(fraction, message);
   };
-  const params::Robot robot = params::robot(p);
-  const FunctionSpec spec = params::spec(p);
+  const params::Robot robot = params::robot(p, context.files);
+  const FunctionSpec spec = params::spec(p, context.files);
   BatchFunctionOptions options;
   options.backend = params::backend(p);
   options.cache_dir = context.cache_dir;
@@ -43,7 +43,7 @@ nlohmann::json runTrajectoryKind(const nlohmann::json& p, const BatchJobContext&
   const BatchFunction function = BatchFunction::open(robot.model, robot.urdf_text, robot.floating_base, spec, options);
 
   TrajectoryJob job;
-  job.data = params::existingFile(p, "data");
+  job.data = params::existingFile(p, "data", context.files);
   job.out = context.result_dir / params::resultFileName(p, "out", "outputs.csv");
   if (const auto format = params::optionalString(p, "format")) job.format = parseOutputFormat(*format);
   double reported = -1;

@@ -51,14 +51,14 @@ TrajectoryOptimizationOptions optionsFrom(const nlohmann::json& p, const Model& 
 
 }  // namespace
 
-void validateTrajoptParams(const nlohmann::json& p) {
-  params::checkRobotFields(p);
+void validateTrajoptParams(const nlohmann::json& p, const FileAccess& files) {
+  params::checkRobotFields(p, files);
   params::backend(p);
-  optionsFrom(p, params::robot(p).model);  // cheap: parses the URDF, checks q0/qT against its limits
+  optionsFrom(p, params::robot(p, files).model);  // cheap: parses the URDF, checks q0/qT against its limits
 }
 
 nlohmann::json runTrajoptKind(const nlohmann::json& p, const BatchJobContext& context) {
-  const params::Robot robot = params::robot(p);
+  const params::Robot robot = params::robot(p, context.files);
   TrajectoryOptimizationOptions options = optionsFrom(p, robot.model);
   const int max_iterations = options.ipopt.max_iterations;
   options.on_iteration = [&](const IterationInfo& info) {

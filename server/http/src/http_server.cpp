@@ -4,6 +4,8 @@
 // closing (closing with unread input would reset the connection and lose the response).
 #include "robodiff/server/http_server.hpp"
 
+#include "host_check.hpp"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -27,6 +29,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr std::chrono::milliseconds kLinger{500};  // draining the client after the response
+
+// This machine's hostname (gethostname), which browsers on the LAN may use.
+std::string machineName() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) return "localhost";
+  return name;
+}
 
 void setNonBlocking(int fd) { ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL, 0) | O_NONBLOCK); }
 
@@ -115,6 +124,7 @@ const char* httpReasonPhrase(int status) {
     case 400: return "Bad Request";
     case 404: return "Not Found";
     case 405: return "Method Not Allowed";
+    case 421: return "Misdirected Request";
     case 500: return "Internal Server Error";
     case 503: return "Service Unavailable";
   }
@@ -131,6 +141,7 @@ struct HttpServer::Impl {
   };
 
   HttpServerOptions options;
+  std::vector<std::string> host_names;  // options.allowed_hosts and this machine's name
   std::map<std::string, HttpHandler, std::less<>> routes;
   int listener = -1;
   int wake[2] = {-1, -1};  // stop() writes to wake[1]
@@ -143,6 +154,11 @@ struct HttpServer::Impl {
     HttpRequest request;
     std::string why;
     if (!parseHead(head, request, why)) return plain(400, "bad request: " + why);
+    for (const auto& [name, value] : request.headers)
+      if (name == "host" && !hostAllowed(value, host_names))
+        return plain(421, "misdirected request: this server does not answer to host '" + value.substr(0, 200) +
+                              "' (it answers to IP addresses, localhost, " + machineName() +
+                              " and http.allowed_hosts in robodiffd.conf)");
     const auto route = routes.find(request.path);
     if (route == routes.end()) return plain(404, "not found: " + request.path);
     if (request.method != "GET" && request.method != "HEAD") {
@@ -259,6 +275,8 @@ struct HttpServer::Impl {
 
 HttpServer::HttpServer(HttpServerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = std::move(options);
+  impl_->host_names = impl_->options.allowed_hosts;
+  impl_->host_names.push_back(machineName());
 }
 
 HttpServer::~HttpServer() { stop(); }

@@ -215,8 +215,12 @@ Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobRe
   if (!params.is_object())
     return {StatusCode::InvalidArgument, "SubmitJob: params_json is not a JSON object: '" +
                                              request.params_json.substr(0, 120) + "'"};
+  std::vector<fs::path> readable = m.options.data_dirs;
+  readable.push_back(m.index.resultDir("_").parent_path());  // earlier jobs' results
   if (m.options.validate)
-    if (Status s = m.options.validate(request.kind, params.dump()); !s.ok()) return s;
+    if (Status s = m.options.validate(request.kind, params.dump(), readable); !s.ok()) return s;
+  json readable_json = json::array();
+  for (const fs::path& dir : readable) readable_json.push_back(dir.string());
 
   {  // finished jobs' finisher threads are joined here, so they do not pile up
     std::lock_guard lock(m.mutex);
@@ -251,6 +255,7 @@ Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobRe
                                 {{"kind", request.kind},
                                  {"params", params},
                                  {"result_dir", staging.string()},
+                                 {"readable_dirs", readable_json},
                                  {"cache_dir", m.options.cache_dir.string()}}}};
   workers::JobCallbacks callbacks;
   Impl::Job* raw = job.get();

@@ -33,6 +33,7 @@
 #include "robodiff/server/service.hpp"
 #include "robodiff/server/service_metrics_text.hpp"
 #include "robodiff/server/shm_server.hpp"
+#include "dds_exposure.hpp"
 #include "server_config.hpp"
 
 namespace {
@@ -125,6 +126,33 @@ const char* signalName(int sig) {
 // Keep the cache usable: below this much free space the server is not ready.
 constexpr std::uint64_t kCacheMinFreeBytes = std::uint64_t{64} << 20;
 
+// The DDS Security identity of dds.security, or none (open DDS) when the exposure policy
+// allows it (dds_exposure.hpp); throws ConfigError when it does not.
+robodiff::dds_codec::DdsSecurity ddsSecurity(const robodiff::server::DdsSettings& dds, Logger& log) {
+  const char* uri = std::getenv("CYCLONEDDS_URI");
+  robodiff::server::DdsExposure exposure;
+  exposure.secure = !dds.security.empty();
+  exposure.loopback_only = robodiff::server::cycloneLoopbackOnly(uri);
+  exposure.allow_unauthenticated = dds.allow_unauthenticated;
+  if (auto refusal = robodiff::server::ddsExposureRefusal(exposure)) throw ConfigError(*refusal);
+  if (exposure.secure) {
+    try {
+      return robodiff::dds_codec::keystoreIdentity(dds.security, dds.security_identity);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(std::string("dds.security: ") + e.what());
+    }
+  }
+  log.warn("dds_open", {{"loopback_only", exposure.loopback_only},
+                        {"message", exposure.loopback_only
+                                        ? "DDS is open (no DDS Security): any process on this host can call "
+                                          "robodiffd over DDS; set dds.security (deploy/security.md) to require "
+                                          "certificates"
+                                        : "DDS is open (no DDS Security) and reachable from other hosts "
+                                          "(dds.allow_unauthenticated = true): anyone on those networks can call "
+                                          "robodiffd"}});
+  return {};
+}
+
 // The readiness checks: RouDi (iceoryx on), the DDS participant (DDS on), the cache
 // directory, and the service itself serving (not starting, not draining).
 void addReadinessChecks(Probes& probes, const ServerConfig& config, const Service& service, const DdsServer* dds,
@@ -180,12 +208,21 @@ int main(int argc, char** argv) {
   }
 
   Logger log(stderr, config.log_level, config.log_format);
+  robodiff::dds_codec::DdsSecurity dds_security;
+  try {
+    if (config.dds.enabled) dds_security = ddsSecurity(config.dds, log);
+  } catch (const std::exception& e) {
+    log.error("startup_refused", {{"message", e.what()}});
+    return 2;
+  }
   const auto started = std::chrono::steady_clock::now();
   try {
     // A submitted job's kind and parameters are checked before it is queued.
-    config.service.validate_job = [](const std::string& kind, const std::string& params_json) -> robodiff::Status {
+    config.service.validate_job = [](const std::string& kind, const std::string& params_json,
+                                     const std::vector<std::filesystem::path>& readable_dirs) -> robodiff::Status {
       try {
-        robodiff::batch::validateBatchJob(kind, nlohmann::json::parse(params_json));
+        robodiff::batch::validateBatchJob(kind, nlohmann::json::parse(params_json),
+                                          robodiff::batch::FileAccess::under(readable_dirs));
         return {};
       } catch (const std::exception& e) {
         return {robodiff::StatusCode::InvalidArgument, "SubmitJob " + kind + ": " + e.what()};
@@ -212,6 +249,7 @@ int main(int argc, char** argv) {
       if (config.dds.domain >= 0) options.domain_id = static_cast<std::uint32_t>(config.dds.domain);
       options.service_name = config.dds.service;
       options.max_sample_bytes = config.dds.max_sample_bytes;
+      options.security = dds_security;
       dds = std::make_unique<DdsServer>(service, options, log);
       dds->start();
     }
@@ -229,6 +267,7 @@ int main(int argc, char** argv) {
       HttpServerOptions options;
       options.host = config.http.host;
       options.port = config.http.port;
+      options.allowed_hosts = config.http.allowed_hosts;
       http = std::make_unique<HttpServer>(options);
       http->route("/metrics", [&service](const HttpRequest&) {
         HttpResponse r;

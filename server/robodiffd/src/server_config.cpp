@@ -4,10 +4,12 @@
 
 #include <arpa/inet.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -95,11 +97,60 @@ std::string formatDuration(std::chrono::milliseconds d) {
 
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
 
+// "dir1:dir2" (as PATH is written): absolute directories only, since jobs run elsewhere.
+std::vector<std::filesystem::path> parseDirectoryList(const std::string& value) {
+  std::vector<std::filesystem::path> dirs;
+  std::size_t begin = 0;
+  while (begin <= value.size()) {
+    const std::size_t end = std::min(value.find(':', begin), value.size());
+    const std::string dir = trim(value.substr(begin, end - begin));
+    if (!dir.empty()) {
+      if (dir.front() != '/') throw std::invalid_argument("names '" + dir + "', which is not an absolute path");
+      dirs.emplace_back(dir);
+    }
+    begin = end + 1;
+  }
+  return dirs;
+}
+
+// "a, b": host names (letters, digits, '-', '.').
+std::vector<std::string> parseNameList(const std::string& value) {
+  std::vector<std::string> names;
+  std::stringstream in(value);
+  for (std::string name; std::getline(in, name, ',');) {
+    name = trim(name);
+    if (name.empty()) continue;
+    for (const char ch : name)
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '.')
+        throw std::invalid_argument("names '" + name + "', which is not a host name");
+    names.push_back(name);
+  }
+  return names;
+}
+
+std::string formatNameList(const std::vector<std::string>& names) {
+  std::string text;
+  for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
+std::string formatDirectoryList(const std::vector<std::filesystem::path>& dirs) {
+  std::string text;
+  for (const auto& d : dirs) text += (text.empty() ? "" : ":") + d.string();
+  return text;
+}
+
 struct Setting {
   const char* key;  // section.key
   std::function<void(ServerConfig&, const std::string&)> parse;
   std::function<std::string(const ServerConfig&)> format;
 };
+
+// A limit of the URDFs LoadModel accepts (ServiceOptions::urdf_limits).
+Setting urdfLimitSetting(const char* key, std::uint64_t UrdfLimits::*field) {
+  return {key, [field](ServerConfig& c, const std::string& v) { c.service.urdf_limits.*field = parseUnsigned(v, 1u << 30); },
+          [field](const ServerConfig& c) { return std::to_string(c.service.urdf_limits.*field); }};
+}
 
 template <class T>
 Setting unsignedSetting(const char* key, T ServiceOptions::*field, std::uint64_t max) {
@@ -119,6 +170,14 @@ const std::vector<Setting>& settings() {
       unsignedSetting("service.max_functions", &ServiceOptions::max_functions, 1u << 20),
       {"service.max_urdf", [](ServerConfig& c, const std::string& v) { c.service.max_urdf_bytes = parseBytes(v); },
        [](const ServerConfig& c) { return formatBytes(c.service.max_urdf_bytes); }},
+      urdfLimitSetting("service.max_urdf_depth", &UrdfLimits::max_depth),
+      urdfLimitSetting("service.max_urdf_elements", &UrdfLimits::max_elements),
+      urdfLimitSetting("service.max_urdf_links", &UrdfLimits::max_links),
+      urdfLimitSetting("service.max_urdf_joints", &UrdfLimits::max_joints),
+      urdfLimitSetting("service.max_urdf_name_length", &UrdfLimits::max_name_length),
+      urdfLimitSetting("service.max_urdf_attribute_length", &UrdfLimits::max_attribute_length),
+      {"service.max_spec", [](ServerConfig& c, const std::string& v) { c.service.max_spec_bytes = parseBytes(v); },
+       [](const ServerConfig& c) { return formatBytes(c.service.max_spec_bytes); }},
       unsignedSetting("build.workers", &ServiceOptions::build_workers, 256),
       {"build.compile", [](ServerConfig& c, const std::string& v) { c.service.compile = parseBool(v); },
        [](const ServerConfig& c) { return std::string(c.service.compile ? "true" : "false"); }},
@@ -136,6 +195,8 @@ const std::vector<Setting>& settings() {
        [](const ServerConfig& c) { return formatDuration(c.service.job_timeout); }},
       {"jobs.memory_limit", [](ServerConfig& c, const std::string& v) { c.service.job_memory_limit_bytes = parseBytes(v); },
        [](const ServerConfig& c) { return formatBytes(c.service.job_memory_limit_bytes); }},
+      {"jobs.data_dirs", [](ServerConfig& c, const std::string& v) { c.service.job_data_dirs = parseDirectoryList(v); },
+       [](const ServerConfig& c) { return quoted(formatDirectoryList(c.service.job_data_dirs)); }},
       {"cache.dir", [](ServerConfig& c, const std::string& v) { c.service.cache_dir = v; },
        [](const ServerConfig& c) { return quoted(c.service.cache_dir.string()); }},
       {"cache.budget", [](ServerConfig& c, const std::string& v) { c.service.cache_budget_bytes = parseBytes(v); },
@@ -162,10 +223,19 @@ const std::vector<Setting>& settings() {
        [](const ServerConfig& c) { return quoted(c.dds.service); }},
       {"dds.max_sample", [](ServerConfig& c, const std::string& v) { c.dds.max_sample_bytes = parseBytes(v); },
        [](const ServerConfig& c) { return formatBytes(c.dds.max_sample_bytes); }},
+      {"dds.security", [](ServerConfig& c, const std::string& v) { c.dds.security = v; },
+       [](const ServerConfig& c) { return quoted(c.dds.security); }},
+      {"dds.security_identity", [](ServerConfig& c, const std::string& v) { c.dds.security_identity = v; },
+       [](const ServerConfig& c) { return quoted(c.dds.security_identity); }},
+      {"dds.allow_unauthenticated",
+       [](ServerConfig& c, const std::string& v) { c.dds.allow_unauthenticated = parseBool(v); },
+       [](const ServerConfig& c) { return std::string(c.dds.allow_unauthenticated ? "true" : "false"); }},
       {"http.enabled", [](ServerConfig& c, const std::string& v) { c.http.enabled = parseBool(v); },
        [](const ServerConfig& c) { return std::string(c.http.enabled ? "true" : "false"); }},
       {"http.listen", [](ServerConfig& c, const std::string& v) { parseListenAddress(v, c.http); },
        [](const ServerConfig& c) { return quoted(c.http.host + ":" + std::to_string(c.http.port)); }},
+      {"http.allowed_hosts", [](ServerConfig& c, const std::string& v) { c.http.allowed_hosts = parseNameList(v); },
+       [](const ServerConfig& c) { return quoted(formatNameList(c.http.allowed_hosts)); }},
       {"log.level", [](ServerConfig& c, const std::string& v) { c.log_level = parseLogLevel(v); },
        [](const ServerConfig& c) { return std::string(toString(c.log_level)); }},
       {"log.format", [](ServerConfig& c, const std::string& v) { c.log_format = parseLogFormat(v); },

@@ -29,6 +29,9 @@ struct DdsSettings {
   std::int32_t domain = -1;          // -1: Cyclone's default (CYCLONEDDS_URI may set it)
   std::string service = "robodiff";  // topic prefix
   std::uint64_t max_sample_bytes = 512 * 1024;  // EvaluateBatch replies beyond are split
+  std::string security;                     // DDS Security keystore directory; "": open DDS
+  std::string security_identity = "robodiffd";  // the server's identity in that keystore
+  bool allow_unauthenticated = false;       // open DDS although it reaches other hosts
 };
 
 // The HTTP listener for operators: GET /metrics (Prometheus), /healthz, /readyz.
@@ -36,6 +39,7 @@ struct HttpSettings {
   bool enabled = true;
   std::string host = "127.0.0.1";  // IPv4; loopback by default: nothing is exposed off the host
   std::uint16_t port = 9464;       // 0: an ephemeral port (logged as http_listening)
+  std::vector<std::string> allowed_hosts;  // Host names accepted besides IPs, localhost, hostname
 };
 
 struct ServerConfig {

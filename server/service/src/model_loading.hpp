@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "model_entry.hpp"
+#include "robodiff/model/urdf_limits.hpp"
 #include "robodiff/schema/messages.hpp"
 
 namespace robodiff::server::detail {
@@ -21,9 +22,10 @@ struct ModelOptions {
 // known ones, a value of the wrong type).
 Status parseModelOptions(const std::string& options_json, ModelOptions& options);
 
-// OK and `entry` (references and functions 0), or INVALID_ARGUMENT saying why the model
-// cannot be loaded.
-Status loadModelEntry(const rpc::LoadModelRequest& request, std::size_t max_urdf_bytes,
+// OK and `entry` (references and functions 0); RESOURCE_EXHAUSTED naming the limit when
+// the URDF exceeds max_urdf_bytes or `limits`; INVALID_ARGUMENT saying why the model
+// cannot be loaded otherwise (physically invalid: naming the link).
+Status loadModelEntry(const rpc::LoadModelRequest& request, std::size_t max_urdf_bytes, const UrdfLimits& limits,
                       std::shared_ptr<ModelEntry>& entry);
 
 }  // namespace robodiff::server::detail

@@ -9,6 +9,7 @@
 #include "identifiers.hpp"
 #include "model_loading.hpp"
 #include "robodiff/functions/function_spec.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "service_state.hpp"
 
 namespace robodiff::server {
@@ -52,8 +53,9 @@ Status guarded(Logger& log, const char* method, Body&& body) {
   try {
     return body();
   } catch (const std::exception& e) {
-    log.error("internal_error", {{"method", method}, {"message", e.what()}});
-    return {StatusCode::Internal, std::string(method) + " failed inside the server: " + e.what()};
+    const std::string what = language::boundedText(e.what(), detail::kMaxErrorBytes);
+    log.error("internal_error", {{"method", method}, {"message", what}});
+    return {StatusCode::Internal, std::string(method) + " failed inside the server: " + what};
   } catch (...) {
     log.error("internal_error", {{"method", method}, {"message", "unknown exception"}});
     return {StatusCode::Internal, std::string(method) + " failed inside the server (unknown exception)"};
@@ -70,6 +72,42 @@ void fillFunctionReply(const detail::FunctionEntry& f, rpc::GetFunctionReply& re
     reply.inputs = e->layout().inputs;
     reply.outputs = e->layout().outputs;
   }
+}
+
+// A ListFunctions page stays within this many bytes of summaries (a reply fits one shm
+// chunk or DDS sample whatever the functions' messages).
+constexpr std::size_t kListFunctionsPageBytes = 256 * 1024;
+
+rpc::FunctionSummary summaryOf(const detail::FunctionEntry& f) {
+  rpc::FunctionSummary summary;
+  summary.function_id = f.id();
+  summary.model_id = f.model().id;
+  summary.function_name = f.functionName();
+  summary.state = f.state();
+  summary.compiled = f.compiled();
+  summary.evaluations = f.evaluations();
+  summary.message = language::boundedText(f.message(), detail::kMaxErrorBytes);
+  return summary;
+}
+
+// What a summary costs on the wire, near enough: its strings and ~32 bytes of the rest.
+std::size_t approximateBytes(const rpc::FunctionSummary& s) {
+  return s.function_id.size() + s.model_id.size() + s.function_name.size() + s.message.size() + 32;
+}
+
+// A page token is the creation sequence of the first function of the page (functions
+// unloaded meanwhile shift no other function to another page).
+Status parsePageToken(const std::string& token, std::uint64_t& first_sequence) {
+  first_sequence = 0;
+  if (token.empty()) return {};
+  const bool digits = token.size() <= 19 && std::all_of(token.begin(), token.end(), [](char c) {
+    return c >= '0' && c <= '9';
+  });
+  if (!digits)
+    return {StatusCode::InvalidArgument, "page_token " + language::quote(token) +
+                                             " is not a next_page_token of an earlier ListFunctions reply"};
+  first_sequence = std::stoull(token);
+  return {};
 }
 
 }  // namespace
@@ -90,7 +128,8 @@ Service::State::State(ServiceOptions o, Logger& l)
       instance_id(options.instance_id.empty() ? detail::makeInstanceId() : options.instance_id),
       cache(openCache(options)),
       pool(poolOptions(options)),
-      builds(buildSettings(options), cache, pool, l),
+      builds(buildSettings(options), cache, pool, l,
+             [this](const std::shared_ptr<detail::FunctionEntry>& f) { unloadFailed(f); }),
       batch(batchThreads(options)),
       requests("request", std::max(1u, options.request_threads),
                std::max<std::size_t>(1, options.request_queue_capacity), [this](const std::string& what) {
@@ -103,9 +142,17 @@ Service::State::State(ServiceOptions o, Logger& l)
     j.worker_executable = options.worker_executable;
     j.timeout = options.job_timeout;
     j.memory_limit_bytes = options.job_memory_limit_bytes;
+    j.data_dirs = options.job_data_dirs;
     j.validate = options.validate_job;
     jobs = std::make_unique<JobManager>(std::move(j), log);
   }
+}
+
+void Service::State::unloadFailed(const std::shared_ptr<detail::FunctionEntry>& function) {
+  detail::Registry::Released released;
+  if (!registry.dropFailed(function, released)) return;
+  log.info("function_unloaded", {{"function_id", function->id()}, {"reason", "failed"}});
+  if (released.model_unloaded) log.info("model_unloaded", {{"model_id", released.model_unloaded->id}});
 }
 
 Service::Service(ServiceOptions options, Logger& log) : state_(std::make_unique<State>(std::move(options), log)) {
@@ -161,7 +208,8 @@ Status Service::admit(const rpc::RequestHeader& header) const {
   if (Status s = checkSchemaVersion(header.schema_version.major, header.schema_version.minor); !s.ok()) return s;
   if (!header.server_instance_id.empty() && header.server_instance_id != state_->instance_id)
     return {StatusCode::NotFound,
-            "request addressed to server " + header.server_instance_id + ", this is " + state_->instance_id};
+            "request addressed to server " + language::boundedText(header.server_instance_id) + ", this is " +
+                state_->instance_id};
   if (state_->serving.load() == rpc::ServingState::Draining) return {StatusCode::Unavailable, detail::kShuttingDown};
   return {};
 }
@@ -172,7 +220,7 @@ Status Service::loadModel(const CallContext& ctx, const rpc::LoadModelRequest& r
   return guarded(s.log, "LoadModel", [&]() -> Status {
     if (ctx.expired()) return detail::deadlineExceeded(ctx, "LoadModel");
     std::shared_ptr<detail::ModelEntry> candidate;
-    if (Status st = detail::loadModelEntry(request, s.options.max_urdf_bytes, candidate); !st.ok()) {
+    if (Status st = detail::loadModelEntry(request, s.options.max_urdf_bytes, s.options.urdf_limits, candidate); !st.ok()) {
       s.log.info("model_rejected", {{"client_id", ctx.client_id}, {"message", st.message}});
       return st;
     }
@@ -202,15 +250,27 @@ Status Service::getFunction(const CallContext& ctx, const rpc::GetFunctionReques
   const InFlight in_flight(s.in_flight);
   return guarded(s.log, "GetFunction", [&]() -> Status {
     if (ctx.expired()) return detail::deadlineExceeded(ctx, "GetFunction");
+    if (request.spec_json.size() > s.options.max_spec_bytes)
+      return {StatusCode::ResourceExhausted, "spec_json: " + std::to_string(request.spec_json.size()) +
+                                                 " bytes, past the limit of " +
+                                                 std::to_string(s.options.max_spec_bytes) + " bytes (max_spec_bytes)"};
     FunctionSpec spec;
     try {
       spec = parseFunctionSpec(request.spec_json, "spec_json");
     } catch (const SpecTooLarge& e) {
-      return {StatusCode::ResourceExhausted, e.what()};
+      return {StatusCode::ResourceExhausted, language::boundedText(e.what(), detail::kMaxErrorBytes)};
     } catch (const SpecError& e) {
-      return {StatusCode::InvalidArgument, e.what()};
+      return {StatusCode::InvalidArgument, language::boundedText(e.what(), detail::kMaxErrorBytes)};
     }
     const std::string id = detail::functionId(request.model_id, normalizedSpecJson(spec));
+    // The same spec failed as invalid a moment ago: the same answer, without tracing again.
+    std::optional<Status> failed;
+    if (s.registry.findModel(request.model_id)) failed = s.builds.recentInvalidSpec(id);
+    if (failed) {
+      reply.function_id = id;
+      reply.state = rpc::FunctionState::Failed;
+      return *failed;
+    }
     auto make = [&](std::shared_ptr<const detail::ModelEntry> model, std::uint64_t sequence) {
       return std::make_shared<detail::FunctionEntry>(id, std::move(model), spec, request.spec_json, sequence);
     };
@@ -249,19 +309,29 @@ Status Service::listFunctions(const CallContext& ctx, const rpc::ListFunctionsRe
     if (!request.model_id.empty()) {
       if (!s.registry.findModel(request.model_id))
         return {StatusCode::NotFound,
-                "unknown model id " + request.model_id + " (never loaded on this server, or released)"};
+                "unknown model id " + language::boundedText(request.model_id) +
+                    " (never loaded on this server, or released)"};
       model = request.model_id;
     }
-    reply.functions.clear();
-    for (const std::shared_ptr<detail::FunctionEntry>& f : s.registry.functions(model)) {
-      rpc::FunctionSummary summary;
-      summary.function_id = f->id();
-      summary.model_id = f->model().id;
-      summary.function_name = f->functionName();
-      summary.state = f->state();
-      summary.compiled = f->compiled();
-      summary.evaluations = f->evaluations();
-      summary.message = f->message();
+    std::uint64_t first_sequence = 0;
+    if (Status st = parsePageToken(request.page_token, first_sequence); !st.ok()) return st;
+    const std::size_t page_size =
+        std::min<std::size_t>(request.page_size == 0 ? rpc::kMaxListFunctionsPage : request.page_size,
+                              rpc::kMaxListFunctionsPage);
+    const std::vector<std::shared_ptr<detail::FunctionEntry>> functions = s.registry.functions(model);
+    reply = {};
+    reply.total = static_cast<std::uint32_t>(functions.size());
+    std::size_t bytes = 0;
+    for (const std::shared_ptr<detail::FunctionEntry>& f : functions) {
+      if (f->sequence() < first_sequence) continue;
+      rpc::FunctionSummary summary = summaryOf(*f);
+      const std::size_t summary_bytes = approximateBytes(summary);
+      if (reply.functions.size() == page_size ||
+          (!reply.functions.empty() && bytes + summary_bytes > kListFunctionsPageBytes)) {
+        reply.next_page_token = std::to_string(f->sequence());
+        break;
+      }
+      bytes += summary_bytes;
       reply.functions.push_back(std::move(summary));
     }
     return {};

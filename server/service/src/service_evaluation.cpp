@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cstring>
 
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/runtime/input_check.hpp"
+#include "output_check.hpp"
 #include "robodiff/server/service.hpp"
 #include "service_state.hpp"
 
@@ -43,8 +45,9 @@ Status servable(const detail::Registry& registry, std::string_view id, std::shar
                 std::shared_ptr<const Evaluator>& evaluator) {
   function = registry.findFunction(id);
   if (!function)
-    return {StatusCode::NotFound, "unknown function id " + std::string(id) +
-                                      " (never loaded on this server, or released); call GetFunction first"};
+    return {StatusCode::NotFound, "unknown function id " + language::boundedText(id) +
+                                      " (never loaded on this server, released, or failed to build: a failed "
+                                      "function is unloaded); call GetFunction first"};
   evaluator = function->evaluator();
   if (evaluator) return {};
   if (function->state() == rpc::FunctionState::Failed)
@@ -135,7 +138,7 @@ Status Service::evaluate(const CallContext& ctx, std::string_view function_id, s
   function->countEvaluations(1);
   function->recordCall(static_cast<std::uint64_t>(
       std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - started).count()));
-  return {};
+  return detail::checkFiniteOutputs(layout, outputs, false);
 }
 
 // On DEADLINE_EXCEEDED the knots of the pieces finished before the deadline are written;
@@ -192,7 +195,7 @@ Status Service::evaluateBatch(const CallContext& ctx, std::string_view function_
   if (expired.load())
     return {StatusCode::DeadlineExceeded, "EvaluateBatch: the deadline passed after " + std::to_string(done.load()) +
                                               " of " + std::to_string(knots) + " knots"};
-  return {};
+  return detail::checkFiniteOutputs(layout, outputs.first(knots * layout.output_count), true);
 }
 
 }  // namespace robodiff::server

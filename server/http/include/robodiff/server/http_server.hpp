@@ -7,7 +7,8 @@
 // string is ignored) answered by callbacks on the server thread: they must be quick.
 //
 // Answers: the route's response; 404 for an unknown path; 405 (with Allow) for another
-// method on a known path; 400 for a malformed or oversized head; 500 when a route throws.
+// method on a known path; 400 for a malformed or oversized head; 421 for a Host header
+// that names another host (host_check.hpp); 500 when a route throws.
 
 #include <chrono>
 #include <cstddef>
@@ -27,6 +28,10 @@ struct HttpServerOptions {
   std::chrono::milliseconds read_timeout = std::chrono::seconds(5);   // for the whole head
   std::chrono::milliseconds write_timeout = std::chrono::seconds(5);  // for the whole response
   std::size_t max_connections = 64;  // beyond: new connections wait in the listen backlog
+  // Host header names accepted besides IP literals, localhost and this machine's hostname
+  // (a request naming another host gets 421: DNS rebinding). A request without Host is
+  // answered (HTTP/1.0 tools); browsers always send one.
+  std::vector<std::string> allowed_hosts;
 };
 
 struct HttpRequest {

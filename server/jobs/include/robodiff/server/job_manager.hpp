@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "robodiff/schema/messages.hpp"
 #include "robodiff/server/log.hpp"
@@ -28,9 +29,15 @@ struct JobManagerOptions {
   std::chrono::milliseconds timeout = std::chrono::hours(2);
   std::uint64_t memory_limit_bytes = std::uint64_t{8} << 30;
   std::size_t queue_capacity = 64;           // jobs waiting; beyond: RESOURCE_EXHAUSTED
-  // Checks a submission before it is queued (known kind, parameters well formed): an
-  // INVALID_ARGUMENT status naming the field, or OK. Unset: every kind is accepted.
-  std::function<Status(const std::string& kind, const std::string& params_json)> validate;
+  // Files a job's parameters may name lie under these directories or under jobs/ (the
+  // results of earlier jobs); nothing else is readable to a job.
+  std::vector<std::filesystem::path> data_dirs;
+  // Checks a submission before it is queued (known kind, parameters well formed, files
+  // under `readable_dirs`): an INVALID_ARGUMENT status naming the field, or OK. Unset:
+  // every kind is accepted.
+  std::function<Status(const std::string& kind, const std::string& params_json,
+                       const std::vector<std::filesystem::path>& readable_dirs)>
+      validate;
 };
 
 struct JobCounts {

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "robodiff/model/urdf_limits.hpp"
 #include "robodiff/server/job_manager.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
@@ -34,16 +35,25 @@ struct ServiceOptions {
   unsigned batch_threads = 0;                // EvaluateBatch pieces in parallel; 0: the cores
   std::uint32_t max_batch_knots = 100000;    // beyond: RESOURCE_EXHAUSTED
   std::size_t max_models = 64;               // beyond: RESOURCE_EXHAUSTED
-  std::size_t max_functions = 1024;
-  std::size_t max_urdf_bytes = std::size_t{16} << 20;  // beyond: INVALID_ARGUMENT
+  std::size_t max_functions = 1024;          // loaded or being built; failed ones are unloaded
+  std::size_t max_spec_bytes = std::size_t{1} << 20;  // a GetFunction spec; beyond: RESOURCE_EXHAUSTED
+  std::size_t max_urdf_bytes = std::size_t{16} << 20;  // beyond: RESOURCE_EXHAUSTED
+  // Depth, elements, links, joints, name and attribute lengths of a URDF, checked before
+  // it is parsed (its max_bytes is capped by max_urdf_bytes); beyond: RESOURCE_EXHAUSTED.
+  UrdfLimits urdf_limits;
   std::string instance_id;                   // empty: "<host>:<pid>:<random>"
   std::string version = "0.1.0";             // reported by Health
   // Batch jobs (job_manager.hpp): worker processes of their own; 0: no jobs (UNIMPLEMENTED).
   unsigned job_workers = 1;
   std::chrono::milliseconds job_timeout = std::chrono::hours(2);
   std::uint64_t job_memory_limit_bytes = std::uint64_t{8} << 30;
-  // Checks a job's kind and parameters at SubmitJob (robodiffd: batch::validateBatchJob).
-  std::function<Status(const std::string& kind, const std::string& params_json)> validate_job;
+  // Files a job may read lie under these (or under the cache's jobs/, earlier results).
+  std::vector<std::filesystem::path> job_data_dirs;
+  // Checks a job's kind and parameters at SubmitJob (robodiffd: batch::validateBatchJob),
+  // the files they name under `readable_dirs`.
+  std::function<Status(const std::string& kind, const std::string& params_json,
+                       const std::vector<std::filesystem::path>& readable_dirs)>
+      validate_job;
 };
 
 // A snapshot of the service's figures for a metrics endpoint (server/http renders it in
@@ -97,8 +107,9 @@ struct ServiceOverview {
   };
   struct BuildFailure {
     double unix_seconds = 0;
-    std::string function_id, model, function, message;
+    std::string function_id, model, function, message;  // message: at most 1 KiB
     bool interpreter_serves = false;
+    std::string stage;  // invalid-spec (never built: does not fit the model) | trace | compile
   };
   struct MethodLatency {
     rpc::Method method = rpc::Method::Health;
@@ -110,7 +121,7 @@ struct ServiceOverview {
   std::vector<MethodLatency> latencies;      // fine histograms: a reader differences two
   std::vector<Model> models;
   std::vector<Function> functions;           // in order of creation
-  std::vector<BuildFailure> build_failures;  // newest first, the latest 20
+  std::vector<BuildFailure> build_failures;  // newest first, the latest 64
   std::vector<rpc::JobInfo> jobs;            // newest first, at most max_jobs
   std::string jobs_error;                    // the job index could not be read
 };
