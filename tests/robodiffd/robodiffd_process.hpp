@@ -109,6 +109,21 @@ class RobodiffdProcess {
   }
 
   // SIGTERM, then waits for the exit; returns the exit code (-1 on a timeout or a signal).
+  // Waits up to `timeout` for robodiffd to exit by itself and reaps it: its exit code, or
+  // -1 (killed by a signal, or still running at the timeout).
+  int waitExit(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (pid_ > 0 && std::chrono::steady_clock::now() < deadline) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return -1;
+  }
+
   int terminate(std::chrono::seconds timeout = std::chrono::seconds(60)) {
     if (pid_ <= 0) return -1;
     ::kill(pid_, SIGTERM);

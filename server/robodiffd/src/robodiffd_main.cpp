@@ -5,11 +5,15 @@
 // drains: new requests get UNAVAILABLE, requests in flight are answered, then it exits 0.
 //
 // Exit codes: 0 stopped cleanly; 1 could not start (the log says why); 2 bad usage or
-// configuration; 3 drained too slowly (requests were still in flight at the drain timeout).
+// configuration; 3 drained too slowly (requests were still in flight at the drain timeout,
+// or stopping outlasted it); 4 RouDi dropped it after a pause (pause_monitor.hpp): its
+// iceoryx ports are gone, so it drains the rest and exits for its supervisor to restart.
 #include <pthread.h>
+#include <unistd.h>
 #include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -34,6 +38,7 @@
 #include "robodiff/server/service_metrics_text.hpp"
 #include "robodiff/server/shm_server.hpp"
 #include "dds_exposure.hpp"
+#include "pause_monitor.hpp"
 #include "server_config.hpp"
 
 namespace {
@@ -123,6 +128,11 @@ const char* signalName(int sig) {
   return "signal";
 }
 
+// A pause longer than this means RouDi (keep-alive timeout ~1.5 s) has probably dropped us.
+constexpr std::chrono::milliseconds kRoudiDropPause{1200};
+// How long stopping may outlast the drain timeout before the watchdog ends the process.
+constexpr std::chrono::seconds kShutdownGrace{3};
+
 // Keep the cache usable: below this much free space the server is not ready.
 constexpr std::uint64_t kCacheMinFreeBytes = std::uint64_t{64} << 20;
 
@@ -156,14 +166,15 @@ robodiff::dds_codec::DdsSecurity ddsSecurity(const robodiff::server::DdsSettings
 // The readiness checks: RouDi (iceoryx on), the DDS participant (DDS on), the cache
 // directory, and the service itself serving (not starting, not draining).
 void addReadinessChecks(Probes& probes, const ServerConfig& config, const Service& service, const DdsServer* dds,
-                        const std::filesystem::path& cache_dir) {
+                        const std::filesystem::path& cache_dir, const std::atomic<bool>& iceoryx_lost) {
   probes.addReadinessCheck("service", [&service]() -> ProbeResult {
     const auto state = service.state();
     if (state == robodiff::rpc::ServingState::Serving) return {true, ""};
     return {false, std::string("state ") + robodiff::rpc::toString(state)};
   });
   if (config.shm.enabled)
-    probes.addReadinessCheck("roudi", []() -> ProbeResult {
+    probes.addReadinessCheck("roudi", [&iceoryx_lost]() -> ProbeResult {
+      if (iceoryx_lost) return {false, "RouDi dropped robodiffd after a pause; it is stopping to be restarted"};
       if (robodiff::shm::roudiRunning()) return {true, ""};
       return {false, "RouDi does not answer on " + robodiff::shm::roudiSocketPath() +
                          "; iceoryx clients cannot connect"};
@@ -235,6 +246,8 @@ int main(int argc, char** argv) {
     // destroyed after it.
     static std::unique_ptr<RoudiHandle> roudi;
     std::unique_ptr<ShmServer> shm;
+    std::atomic<bool> iceoryx_lost{false};
+    std::unique_ptr<PauseMonitor> pause_monitor;
     if (config.shm.enabled) {
       roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
       ShmServerOptions options;
@@ -242,6 +255,14 @@ int main(int argc, char** argv) {
       shm = std::make_unique<ShmServer>(service, options, log);
       if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
         throw std::runtime_error("iceoryx: " + started_shm.message);
+      pause_monitor = std::make_unique<PauseMonitor>(kRoudiDropPause, [&log, &iceoryx_lost](double seconds) {
+        iceoryx_lost = true;
+        log.error("iceoryx_lost", {{"paused_seconds", seconds},
+                                   {"message", "robodiffd was paused past RouDi's keep-alive timeout, so RouDi has "
+                                               "dropped it; draining the other transports and exiting with 4 for "
+                                               "the supervisor to restart it"}});
+        ::kill(::getpid(), SIGTERM);  // the main thread's sigwait takes it: the usual drain
+      });
     }
     std::unique_ptr<DdsServer> dds;
     if (config.dds.enabled) {
@@ -263,7 +284,7 @@ int main(int argc, char** argv) {
       });
       const std::filesystem::path cache_dir =
           config.service.cache_dir.empty() ? robodiff::cache::defaultCacheDir() : config.service.cache_dir;
-      addReadinessChecks(probes, config, service, dds.get(), cache_dir);
+      addReadinessChecks(probes, config, service, dds.get(), cache_dir, iceoryx_lost);
       HttpServerOptions options;
       options.host = config.http.host;
       options.port = config.http.port;
@@ -299,22 +320,29 @@ int main(int argc, char** argv) {
 
     int sig = 0;
     sigwait(&stop_signals, &sig);
-    log.info("draining", {{"signal", signalName(sig)}});
+    log.info("draining", {{"signal", signalName(sig)}, {"iceoryx_lost", iceoryx_lost.load()}});
     service.beginDrain();
     if (shm) shm->stopAccepting();
     if (dds) dds->stopAccepting();
     const auto drain_timeout = std::chrono::milliseconds(static_cast<long long>(flags.drain_timeout_s * 1000));
+    armShutdownWatchdog(drain_timeout + kShutdownGrace, 3);
     const auto drain_deadline = std::chrono::steady_clock::now() + drain_timeout;
     auto left = [&] {
       return std::chrono::duration_cast<std::chrono::milliseconds>(
           std::max(drain_deadline - std::chrono::steady_clock::now(), std::chrono::steady_clock::duration::zero()));
     };
     bool idle = service.waitIdle(left());
-    if (shm) idle = shm->waitIdle(left()) && idle;
+    if (shm && !iceoryx_lost) idle = shm->waitIdle(left()) && idle;
     if (dds) idle = dds->waitIdle(left()) && idle;
     if (!idle) log.warn("drain_timeout", {{"seconds", flags.drain_timeout_s}});
     if (http) http->stop();  // its checks read the transports and the service
     if (dds) dds->stop();
+    if (iceoryx_lost) {  // its ports' memory is RouDi's again: touching them would abort
+      shm.release();
+      log.info("stopped", {{"clean", idle}, {"exit_code", 4}});
+      std::fflush(nullptr);
+      std::_Exit(4);  // no static destructors: the iceoryx runtime's would touch them too
+    }
     if (shm) shm->stop();
     dds.reset();
     shm.reset();
