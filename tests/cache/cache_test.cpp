@@ -19,6 +19,7 @@
 #include "robodiff/cache/cache_key.hpp"
 #include "robodiff/model/canonical.hpp"
 #include "support/process.hpp"
+#include "cache/cache_fixtures.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
 
@@ -27,19 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::TempDir;
-
-std::string keyOf(const std::string& name) { return sha256Hex(name); }
-
-EntryInfo infoFor(const std::string& function) {
-  EntryInfo info;
-  info.model_hash = sha256Hex("model");
-  info.robot = "arm7";
-  info.function = function;
-  info.spec = R"({"function":")" + function + R"("})";
-  info.sizes = R"({"inputs":[7,7,7],"outputs":[7]})";
-  info.compiler = "cc (test) 1.0 -O0";
-  return info;
-}
 
 // Made-up build output: a "library" of `bytes` bytes, a description and one source.
 ArtifactFiles makeFiles(const TempDir& tmp, const std::string& name, std::size_t bytes) {

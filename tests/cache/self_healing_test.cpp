@@ -15,6 +15,7 @@
 
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/model/canonical.hpp"
+#include "cache/cache_fixtures.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
 
@@ -23,20 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::TempDir;
-
-std::string keyOf(const std::string& name) { return sha256Hex(name); }
-
-EntryInfo infoFor(const std::string& function) {
-  EntryInfo info;
-  info.model_hash = sha256Hex("model");
-  info.robot = "arm7";
-  info.function = function;
-  info.spec = R"({"function":")" + function + R"("})";
-  info.sizes = R"({"inputs":[7,7,7],"outputs":[7]})";
-  info.compiler = "cc (test) 1.0 -O0";
-  info.build_seconds = 1.5;
-  return info;
-}
 
 // Publishes a made-up library of `bytes` bytes whose content depends on `name`.
 Artifact build(Cache& cache, const TempDir& tmp, const std::string& name, std::size_t bytes = 4096) {
