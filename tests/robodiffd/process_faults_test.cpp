@@ -8,6 +8,8 @@
 #include <thread>
 
 #include "robodiffd/service_fixture.hpp"
+#include "support/cache_workspace.hpp"
+#include "support/process.hpp"
 
 namespace robodiff::testing {
 namespace {
@@ -39,6 +41,40 @@ TEST(ProcessFaults, APauseLongEnoughForRouDiToDropItEndsInExitCode4) {
   auto client = connectTo("iceoryx");
   rpc::HealthReply health;
   EXPECT_TRUE(client->health({}, health).ok());
+  EXPECT_EQ(restarted.terminate(std::chrono::seconds(30)), 0) << restarted.log();
+}
+
+// A RouDi restart (the supervisor's remedy when a process killed while holding a port's
+// mutex hangs RouDi, deploy/README.md): the running robodiffd's iceoryx runtime belongs to
+// the old RouDi, so it must exit 4 and a new one serve. Clients run as CLI processes: this
+// test process must not register with a RouDi that it then kills.
+TEST(ProcessFaults, ARouDiRestartEndsInExitCode4AndANewRobodiffdServes) {
+  signal(SIGTERM, SIG_IGN);
+  if (shm::roudiRunning()) GTEST_SKIP() << "this test must own RouDi: run it alone (ctest runs each test alone)";
+  TempDir dir;
+  const std::string health = cli("health --server shm --timeout 5");
+  auto first = std::make_unique<RoudiProcess>();
+  RobodiffdProcess server(dir / "cache", dir / "robodiffd.log",
+                          {"--roudi", "external", "--no-http", "--drain-timeout", "2"});
+  ASSERT_TRUE(server.running());
+  ProcessResult r = runCommand(health);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+
+  first->stop();  // SIGKILL, leftovers removed: as a supervisor ends a hung RouDi
+  std::this_thread::sleep_for(1s);
+  EXPECT_EQ(server.waitExit(0s), -1) << "no RouDi is not a reason to exit: DDS still serves\n" << server.log();
+  RoudiProcess second;
+
+  const int code = server.waitExit(6s);  // noticed within 250 ms, then the 2 s drain
+  EXPECT_EQ(code, 4) << server.log();
+  const std::string log = server.log();
+  EXPECT_NE(log.find("\"event\":\"iceoryx_lost\""), std::string::npos) << log;
+  EXPECT_NE(log.find("RouDi was restarted"), std::string::npos) << log;
+
+  RobodiffdProcess restarted(dir / "cache", dir / "robodiffd-2.log", {"--roudi", "external", "--no-http"});
+  ASSERT_TRUE(restarted.running());
+  r = runCommand(health);
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err << restarted.log();
   EXPECT_EQ(restarted.terminate(std::chrono::seconds(30)), 0) << restarted.log();
 }
 

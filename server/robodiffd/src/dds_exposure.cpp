@@ -43,9 +43,9 @@ std::string attribute(const std::string& attributes, const std::string& name) {
 
 }  // namespace
 
-bool cycloneLoopbackOnly(const char* uri) {
-  if (uri == nullptr || *uri == '\0') return true;  // robodiff's embedded loopback configuration
-  int interfaces = 0;
+std::vector<CycloneInterface> cycloneInterfaces(const char* uri) {
+  std::vector<CycloneInterface> found;
+  if (uri == nullptr) return found;
   static const std::regex element(R"(<NetworkInterface\b([^>]*)>)");
   static const std::regex legacy(R"(<NetworkInterfaceAddress>\s*([^<\s]*)\s*</NetworkInterfaceAddress>)");
   static const std::regex comment(R"(<!--[\s\S]*?-->)");
@@ -53,18 +53,23 @@ bool cycloneLoopbackOnly(const char* uri) {
     const std::string text = std::regex_replace(raw, comment, "");
     for (auto it = std::sregex_iterator(text.begin(), text.end(), element); it != std::sregex_iterator(); ++it) {
       const std::string attributes = (*it)[1].str();
-      ++interfaces;
-      if (attribute(attributes, "autodetermine") == "true") return false;
-      const std::string address = attribute(attributes, "address"), name = attribute(attributes, "name");
-      if (!loopbackAddress(address) && name != "lo") return false;
+      found.push_back({attribute(attributes, "name"), attribute(attributes, "address"),
+                       attribute(attributes, "autodetermine") == "true"});
     }
     for (auto it = std::sregex_iterator(text.begin(), text.end(), legacy); it != std::sregex_iterator(); ++it) {
-      ++interfaces;
-      const std::string address = (*it)[1].str();
-      if (!loopbackAddress(address) && address != "lo") return false;
+      const std::string value = (*it)[1].str();  // an address, or (older configurations) a device name
+      found.push_back(value == "lo" ? CycloneInterface{"lo", "", false} : CycloneInterface{"", value, false});
     }
   }
-  return interfaces > 0;
+  return found;
+}
+
+bool cycloneLoopbackOnly(const char* uri) {
+  if (uri == nullptr || *uri == '\0') return true;  // robodiff's embedded loopback configuration
+  const std::vector<CycloneInterface> interfaces = cycloneInterfaces(uri);
+  for (const CycloneInterface& i : interfaces)
+    if (i.autodetermine || (!loopbackAddress(i.address) && i.name != "lo")) return false;
+  return !interfaces.empty();
 }
 
 std::optional<std::string> ddsExposureRefusal(const DdsExposure& e) {

@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace robodiff::server {
 
@@ -14,6 +15,14 @@ namespace robodiff::server {
 // uses its embedded loopback configuration (schema/dds dds_domain.hpp). Autodetermine or
 // any other interface: false (Cyclone then uses a network interface).
 bool cycloneLoopbackOnly(const char* uri);
+
+// One <NetworkInterface> (or legacy <NetworkInterfaceAddress>) of a Cyclone configuration.
+struct CycloneInterface {
+  std::string name, address;
+  bool autodetermine = false;
+};
+// Every interface named in `uri`'s configuration texts, comments ignored.
+std::vector<CycloneInterface> cycloneInterfaces(const char* uri);
 
 struct DdsExposure {
   bool secure = false;         // a keystore is configured

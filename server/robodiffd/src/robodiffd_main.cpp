@@ -6,8 +6,9 @@
 //
 // Exit codes: 0 stopped cleanly; 1 could not start (the log says why); 2 bad usage or
 // configuration; 3 drained too slowly (requests were still in flight at the drain timeout,
-// or stopping outlasted it); 4 RouDi dropped it after a pause (pause_monitor.hpp): its
-// iceoryx ports are gone, so it drains the rest and exits for its supervisor to restart.
+// or stopping outlasted it); 4 RouDi no longer knows it, after a pause (pause_monitor.hpp)
+// or a RouDi restart (roudi_watch.hpp): its iceoryx ports are gone, so it drains the rest
+// and exits for its supervisor to restart it.
 #include <pthread.h>
 #include <unistd.h>
 #include <signal.h>
@@ -39,6 +40,8 @@
 #include "robodiff/server/shm_server.hpp"
 #include "dds_exposure.hpp"
 #include "pause_monitor.hpp"
+#include "dds_socket_binding.hpp"
+#include "roudi_watch.hpp"
 #include "server_config.hpp"
 
 namespace {
@@ -163,6 +166,26 @@ robodiff::dds_codec::DdsSecurity ddsSecurity(const robodiff::server::DdsSettings
   return {};
 }
 
+// Binds the DDS participant's UDP sockets to the one device its configuration names
+// (dds_socket_binding.hpp), and logs what was done or why not.
+void confineDdsSockets(Logger& log) {
+  const auto device = robodiff::server::cycloneSingleDevice(std::getenv("CYCLONEDDS_URI"));
+  if (!device) {
+    log.info("dds_sockets_unconfined",
+             {{"message", "the Cyclone configuration names several interfaces or lets Cyclone choose: its sockets "
+                          "accept packets from every interface; confine the unit with RestrictNetworkInterfaces= "
+                          "(deploy/security.md)"}});
+    return;
+  }
+  const auto bound = robodiff::server::bindUdpSocketsToDevice(*device);
+  std::string sockets;
+  for (const std::string& s : bound.sockets) sockets += (sockets.empty() ? "" : ", ") + s;
+  if (!bound.error.empty())
+    log.warn("dds_sockets_not_confined", {{"device", *device}, {"bound", sockets}, {"error", bound.error}});
+  else
+    log.info("dds_sockets_confined", {{"device", *device}, {"sockets", sockets}});
+}
+
 // The readiness checks: RouDi (iceoryx on), the DDS participant (DDS on), the cache
 // directory, and the service itself serving (not starting, not draining).
 void addReadinessChecks(Probes& probes, const ServerConfig& config, const Service& service, const DdsServer* dds,
@@ -174,7 +197,7 @@ void addReadinessChecks(Probes& probes, const ServerConfig& config, const Servic
   });
   if (config.shm.enabled)
     probes.addReadinessCheck("roudi", [&iceoryx_lost]() -> ProbeResult {
-      if (iceoryx_lost) return {false, "RouDi dropped robodiffd after a pause; it is stopping to be restarted"};
+      if (iceoryx_lost) return {false, "RouDi no longer knows robodiffd (a pause or a RouDi restart); it is stopping to be restarted"};
       if (robodiff::shm::roudiRunning()) return {true, ""};
       return {false, "RouDi does not answer on " + robodiff::shm::roudiSocketPath() +
                          "; iceoryx clients cannot connect"};
@@ -248,6 +271,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<ShmServer> shm;
     std::atomic<bool> iceoryx_lost{false};
     std::unique_ptr<PauseMonitor> pause_monitor;
+    std::unique_ptr<RoudiWatch> roudi_watch;
     if (config.shm.enabled) {
       roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
       ShmServerOptions options;
@@ -255,14 +279,19 @@ int main(int argc, char** argv) {
       shm = std::make_unique<ShmServer>(service, options, log);
       if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
         throw std::runtime_error("iceoryx: " + started_shm.message);
-      pause_monitor = std::make_unique<PauseMonitor>(kRoudiDropPause, [&log, &iceoryx_lost](double seconds) {
-        iceoryx_lost = true;
-        log.error("iceoryx_lost", {{"paused_seconds", seconds},
-                                   {"message", "robodiffd was paused past RouDi's keep-alive timeout, so RouDi has "
-                                               "dropped it; draining the other transports and exiting with 4 for "
-                                               "the supervisor to restart it"}});
-        ::kill(::getpid(), SIGTERM);  // the main thread's sigwait takes it: the usual drain
+      // Paused past RouDi's keep-alive timeout, or RouDi replaced: the iceoryx runtime is
+      // lost either way; the usual drain follows (the main thread's sigwait takes SIGTERM).
+      auto lose_iceoryx = [&log, &iceoryx_lost](const std::string& reason) {
+        if (iceoryx_lost.exchange(true)) return;
+        log.error("iceoryx_lost", {{"reason", reason},
+                                   {"message", "RouDi no longer knows robodiffd; draining the other transports and "
+                                               "exiting with 4 for the supervisor to restart it"}});
+        ::kill(::getpid(), SIGTERM);
+      };
+      pause_monitor = std::make_unique<PauseMonitor>(kRoudiDropPause, [lose_iceoryx](double seconds) {
+        lose_iceoryx("paused for " + std::to_string(seconds) + " s, past RouDi's keep-alive timeout");
       });
+      roudi_watch = std::make_unique<RoudiWatch>(lose_iceoryx);
     }
     std::unique_ptr<DdsServer> dds;
     if (config.dds.enabled) {
@@ -273,6 +302,7 @@ int main(int argc, char** argv) {
       options.security = dds_security;
       dds = std::make_unique<DdsServer>(service, options, log);
       dds->start();
+      confineDdsSockets(log);
     }
 
     // Operators' HTTP endpoints; stopped before the transports and the service go.
