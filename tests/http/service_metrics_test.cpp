@@ -53,6 +53,8 @@ TEST(ServiceMetrics, RecordedRequestsBecomeCountersAndBuckets) {
   EXPECT_EQ(p.value("robodiff_transport_requests_total", {{"transport", "dds"}}), 3.0);
   EXPECT_EQ(p.value("robodiff_transport_errors_total", {{"transport", "dds"}}), 1.0);
   EXPECT_EQ(p.value("robodiff_cache_entries"), 0.0);
+  EXPECT_EQ(p.value("robodiff_cache_quarantined"), 0.0);
+  EXPECT_EQ(p.value("robodiff_build_retries_total"), 0.0);
   EXPECT_EQ(p.value("robodiff_workers", {{"state", "idle"}}), 1.0);
   EXPECT_EQ(p.family("robodiff_jobs")->samples.size(), 0u);  // jobs off
 }

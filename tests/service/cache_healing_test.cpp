@@ -24,6 +24,7 @@ fs::path onlyLibrary(const fs::path& cache_dir) {
 struct ServiceRun {
   std::vector<double> outputs;
   rpc::HealthReply health;
+  std::uint64_t quarantined = 0;  // metrics(): the cache's quarantine/ entries
 };
 
 // One service on the workspace's cache: the function compiled (from the cache or built),
@@ -39,6 +40,7 @@ ServiceRun runOnce(ServiceWorkspace& ws, const std::vector<double>& inputs, std:
   run.outputs.resize(knots * rpc::outputCount(f));
   EXPECT_TRUE(service->evaluateBatch(context(), f.function_id, knots, inputs, run.outputs).ok());
   run.health = health(*service);
+  run.quarantined = service->metrics().cache_quarantined;
   return run;
 }
 
@@ -48,6 +50,7 @@ TEST(CacheHealing, AMissingTruncatedOrReplacedLibraryIsRebuiltOnTheNextGetFuncti
   const std::vector<double> inputs = someInputs(knots * 21, 5);  // arm7: q, v, a of 7 each
   const ServiceRun first = runOnce(ws, inputs, knots);
   ASSERT_EQ(first.health.builds_done, 1u);
+  EXPECT_EQ(first.quarantined, 0u);
 
   // Deleted: a miss, built again, the same numbers.
   fs::remove(onlyLibrary(ws.tmp / "cache"));
@@ -66,6 +69,7 @@ TEST(CacheHealing, AMissingTruncatedOrReplacedLibraryIsRebuiltOnTheNextGetFuncti
   EXPECT_EQ(after_truncate.health.cache_misses, 1u);
   EXPECT_EQ(after_truncate.health.builds_done, 1u);
   EXPECT_TRUE(closeTo(after_truncate.outputs, first.outputs, 1e-12));
+  EXPECT_GT(after_truncate.quarantined, after_delete.quarantined);  // the truncated entry, kept
 
   // Changed (bytes appended, the size and hash differ): never loaded.
   const fs::path current = onlyLibrary(ws.tmp / "cache");
@@ -74,6 +78,7 @@ TEST(CacheHealing, AMissingTruncatedOrReplacedLibraryIsRebuiltOnTheNextGetFuncti
   const ServiceRun after_replace = runOnce(ws, inputs, knots);
   EXPECT_EQ(after_replace.health.cache_misses, 1u);
   EXPECT_TRUE(closeTo(after_replace.outputs, first.outputs, 1e-12));
+  EXPECT_GT(after_replace.quarantined, after_truncate.quarantined);
 
   // A run on the healed cache is a plain hit.
   const ServiceRun healed = runOnce(ws, inputs, knots);

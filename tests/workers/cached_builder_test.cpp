@@ -226,6 +226,7 @@ TEST(CachedBuilder, ABuildWhoseWorkerIsKilledIsRetriedAfterAPauseAndSucceeds) {
   EXPECT_NE(retry_messages[0].find("trying again in 0.5 s (attempt 2 of 3)"), std::string::npos) << retry_messages[0];
   EXPECT_EQ(pool.stats().crashed, 1u);
   EXPECT_EQ(pool.stats().succeeded, 1u);
+  EXPECT_EQ(builder.workerDeathRetries(), 1u);  // what /metrics shows as robodiff_build_retries_total
   const std::optional<cache::Artifact> a = cache.find(result[0].key);
   ASSERT_TRUE(a);
   EXPECT_NO_THROW(codegen::LoadedLibrary::open(a->library()).function(result[0].function));
@@ -253,6 +254,7 @@ TEST(CachedBuilder, ABuildWhoseWorkerIsKilledEveryTimeFailsAfterThreeAttemptsNam
   EXPECT_NE(result[0].message.find("3 attempts"), std::string::npos) << result[0].message;
   EXPECT_NE(stderr_text.find("attempt 3 of 3"), std::string::npos) << stderr_text;
   EXPECT_EQ(pool.stats().crashed, 3u);
+  EXPECT_EQ(builder.workerDeathRetries(), 2u);  // the third death is final
   testing::expectNothingLeft(cache, result[0].key);
 }
 

@@ -214,6 +214,7 @@ std::vector<BuildStatus> CachedBuilder::buildAll(const std::vector<BuildTarget>&
     if (r.state == JobState::Crashed && w.attempts < max_attempts) {
       const std::chrono::milliseconds pause = options_.worker_death_backoff[w.attempts - 1];
       w.retry_at = Clock::now() + pause;
+      worker_death_retries_.fetch_add(1, std::memory_order_relaxed);
       std::cerr << "robodiff: building " << w.status.robot << "/" << w.status.function << ": " << r.message
                 << "; trying again in " << secondsText(pause) << " (attempt " << w.attempts + 1 << " of "
                 << max_attempts << ")\n";

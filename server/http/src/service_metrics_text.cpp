@@ -73,7 +73,13 @@ std::string serviceMetricsText(const ServiceMetrics& m) {
     t.sample("robodiff_cache_bytes", {}, d(m.cache_bytes));
     t.family("robodiff_cache_entries", MetricType::Gauge, "Libraries in the cache.");
     t.sample("robodiff_cache_entries", {}, d(m.cache_entries));
+    t.family("robodiff_cache_quarantined", MetricType::Gauge,
+             "Cache entries in quarantine/: found missing, truncated or altered, kept for inspection.");
+    t.sample("robodiff_cache_quarantined", {}, d(m.cache_quarantined));
   }
+  t.family("robodiff_build_retries_total", MetricType::Counter,
+           "Builds tried again because their worker process died (killed, crashed, out of memory).");
+  t.sample("robodiff_build_retries_total", {}, d(m.build_retries));
 
   t.family("robodiff_workers", MetricType::Gauge, "Build worker processes, busy (building) or idle.");
   t.sample("robodiff_workers", {{"state", "busy"}}, m.workers_busy);

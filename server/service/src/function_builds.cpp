@@ -84,6 +84,7 @@ BuildFigures FunctionBuilds::figures() const {
   f.builds_running = builds_running_.load(std::memory_order_relaxed);
   f.builds_failed = builds_failed_.load(std::memory_order_relaxed);
   f.builds_done = builds_done_.load(std::memory_order_relaxed);
+  f.build_retries = builder_.workerDeathRetries();
   return f;
 }
 

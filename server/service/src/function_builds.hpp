@@ -45,6 +45,7 @@ struct BuildSettings {
 struct BuildFigures {
   std::uint64_t cache_hits = 0, cache_misses = 0;
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
+  std::uint64_t build_retries = 0;  // builds tried again after their worker died
 };
 
 // Where a function failed.

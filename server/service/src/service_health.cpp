@@ -25,11 +25,13 @@ bool fillServiceFigures(State& s, Out& out) {
   out.builds_done = builds.builds_done;
   out.cache_hits = builds.cache_hits;
   out.cache_misses = builds.cache_misses;
+  if constexpr (requires { out.build_retries; }) out.build_retries = builds.build_retries;
   bool cache_ok = true;
   try {
     const cache::CacheStats stats = s.cache.stats();
     out.cache_bytes = stats.bytes;
     out.cache_entries = stats.entries;
+    if constexpr (requires { out.cache_quarantined; }) out.cache_quarantined = stats.quarantined;
   } catch (const std::exception& e) {
     cache_ok = false;
     s.log.warn("cache_stats_failed", {{"message", e.what()}});  // the figures still answer

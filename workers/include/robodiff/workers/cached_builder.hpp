@@ -10,6 +10,7 @@
 // Used by `robodiff warmup` now and the server later.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -82,10 +83,14 @@ class CachedBuilder {
   // are final.
   std::vector<BuildStatus> buildAll(const std::vector<BuildTarget>& targets, const Listener& listener = {});
 
+  // Builds tried again because their worker died, since this builder was made.
+  std::uint64_t workerDeathRetries() const { return worker_death_retries_.load(std::memory_order_relaxed); }
+
  private:
   cache::Cache& cache_;
   WorkerPool& pool_;
   CachedBuilderOptions options_;
+  std::atomic<std::uint64_t> worker_death_retries_{0};
 };
 
 }  // namespace robodiff::workers

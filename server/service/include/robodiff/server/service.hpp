@@ -76,6 +76,8 @@ struct ServiceMetrics {
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
   std::uint64_t cache_hits = 0, cache_misses = 0, cache_bytes = 0, cache_entries = 0;
   bool cache_stats_ok = true;  // false: the cache's figures could not be read (bytes, entries 0)
+  std::uint64_t cache_quarantined = 0;  // entries moved to the cache's quarantine/ (on disk now)
+  std::uint64_t build_retries = 0;      // builds tried again after their worker died
   std::uint32_t workers_total = 0, workers_busy = 0;
   std::uint32_t queue_depth = 0, queue_capacity = 0;
   bool jobs_enabled = false;
