@@ -11,7 +11,8 @@ PACKAGES=(
   openssl  # robodiff security: the DDS Security keystore (certificates, S/MIME-signed XML)
   cyclonedds-dev cyclonedds-tools
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
-  coinor-libipopt-dev libspdlog-dev libfmt-dev libzstd-dev libtbb-dev
+  coinor-libipopt-dev libzstd-dev
+  libspdlog-dev libfmt-dev  # robodiffd's log lines (spdlog formats with fmt)
   clang tcc
   chromium chromium-driver  # the dashboard's test runs the page in headless Chromium
 )

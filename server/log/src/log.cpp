@@ -1,50 +1,23 @@
-// One log line per event, JSON or text, written whole under a mutex.
+// One log line per event, JSON or text: the event and its fields are formatted here
+// (strings escaped by nlohmann::json), the time stamp and the writing are spdlog's.
 #include "robodiff/server/log.hpp"
 
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <stdexcept>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/logger.h>
+#include <spdlog/pattern_formatter.h>
+#include <spdlog/sinks/stdout_sinks.h>
 
 #include "robodiff/language/bounded_text.hpp"
 
 namespace robodiff::server {
 namespace {
 
-// 2026-11-22T05:24:25.123Z
-std::string utcTimestamp() {
-  const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto millis =
-      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
-  std::tm tm{};
-  gmtime_r(&seconds, &tm);
-  char text[64];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1,
-                tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(millis));
-  return text;
-}
-
+// A JSON string literal; invalid UTF-8 replaced, never an exception.
 void appendJsonString(std::string& out, std::string_view s) {
-  out += '"';
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char escaped[8];
-          std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-          out += escaped;
-        } else {
-          out += c;
-        }
-    }
-  }
-  out += '"';
+  out += nlohmann::json(std::string(s)).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 // Text values are quoted when they hold spaces, quotes or '=' (logfmt's rule).
@@ -58,14 +31,11 @@ void appendTextValue(std::string& out, std::string_view s) {
 
 void appendNumber(std::string& out, double v, bool json) {
   if (!std::isfinite(v)) {  // JSON has no NaN / inf: write them as strings
-    if (json) out += '"';
-    out += std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
-    if (json) out += '"';
+    const char* name = std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+    out += json ? "\"" + std::string(name) + "\"" : std::string(name);
     return;
   }
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  out += text;
+  out += fmt::format("{:.6g}", v);
 }
 
 void appendValue(std::string& out, const LogField& field, bool json) {
@@ -88,24 +58,56 @@ void appendValue(std::string& out, const LogField& field, bool json) {
       field.value);
 }
 
-// A line past kMaxLogLineBytes (many long fields): one that keeps the event, the start
-// of the line and its size, still one valid line of its format.
-std::string cutLine(const std::string& line, const std::string& ts, LogLevel level, std::string_view event,
-                    bool json) {
-  const std::string start = language::boundedText(line, kMaxLogLineBytes / 4);
+// What follows the time stamp: `"level":"info","event":"x","k":v...}` (JSON) or
+// `info x k=v ...` (text).
+std::string body(LogLevel level, std::string_view event, std::initializer_list<LogField> fields, bool json) {
+  std::string line;
+  line.reserve(160);
+  if (json) {
+    line += "\"level\":\"" + std::string(toString(level)) + "\",\"event\":";
+    appendJsonString(line, event);
+    for (const LogField& f : fields) {
+      line += ',';
+      appendJsonString(line, f.key);
+      line += ':';
+      appendValue(line, f, true);
+    }
+    return line + '}';
+  }
+  line += std::string(toString(level)) + ' ';
+  line += event;
+  for (const LogField& f : fields) {
+    line += ' ';
+    line += f.key;
+    line += '=';
+    appendValue(line, f, false);
+  }
+  return line;
+}
+
+// A body past the line limit (many long fields): one that keeps the event, the start of
+// the body and its size, still one valid line of its format.
+std::string cutBody(const std::string& body, LogLevel level, std::string_view event, bool json) {
+  const std::string start = language::boundedText(body, kMaxLogLineBytes / 4);
   std::string out;
   if (json) {
-    out = "{\"ts\":\"" + ts + "\",\"level\":\"" + toString(level) + "\",\"event\":";
+    out = "\"level\":\"" + std::string(toString(level)) + "\",\"event\":";
     appendJsonString(out, event);
-    out += ",\"line_bytes\":" + std::to_string(line.size()) + ",\"cut_line\":";
+    out += ",\"line_bytes\":" + std::to_string(body.size()) + ",\"cut_line\":";
     appendJsonString(out, start);
-    return out + "}\n";
+    return out + '}';
   }
-  out = ts + ' ' + toString(level) + ' ';
+  out = std::string(toString(level)) + ' ';
   out += event;
-  out += " line_bytes=" + std::to_string(line.size()) + " cut_line=";
+  out += " line_bytes=" + std::to_string(body.size()) + " cut_line=";
   appendJsonString(out, start);
-  return out + '\n';
+  return out;
+}
+
+// The time stamp in UTC with milliseconds: 2026-11-22T05:24:25.123Z.
+std::unique_ptr<spdlog::formatter> formatterFor(LogFormat format) {
+  const char* pattern = format == LogFormat::Json ? "{\"ts\":\"%Y-%m-%dT%H:%M:%S.%eZ\",%v" : "%Y-%m-%dT%H:%M:%S.%eZ %v";
+  return std::make_unique<spdlog::pattern_formatter>(pattern, spdlog::pattern_time_type::utc);
 }
 
 }  // namespace
@@ -134,39 +136,28 @@ LogFormat parseLogFormat(std::string_view text) {
   throw std::invalid_argument("log format '" + std::string(text) + "' is not one of json, text");
 }
 
-Logger::Logger(std::FILE* out, LogLevel min_level, LogFormat format)
-    : out_(out), min_level_(min_level), format_(format) {}
+Logger::Logger(std::FILE* out, LogLevel min_level, LogFormat format) : min_level_(min_level), format_(format) {
+  if (out == nullptr) return;
+  // stdout_sink_base: fwrite and fflush of each whole line, under spdlog's console mutex.
+  auto sink = std::make_shared<spdlog::sinks::stdout_sink_base<spdlog::details::console_mutex>>(out);
+  sink_logger_ = std::make_shared<spdlog::logger>("robodiffd", std::move(sink));
+  sink_logger_->set_level(spdlog::level::trace);  // the level is filtered here, before formatting
+  sink_logger_->set_formatter(formatterFor(format));
+}
+
+Logger::~Logger() = default;
+
+void Logger::setFormat(LogFormat format) {
+  format_ = format;
+  if (sink_logger_) sink_logger_->set_formatter(formatterFor(format));
+}
 
 void Logger::log(LogLevel level, std::string_view event, std::initializer_list<LogField> fields) {
-  if (!enabled(level) || out_ == nullptr) return;
-  std::string line;
-  line.reserve(160);
-  const std::string ts = utcTimestamp();
-  if (format_ == LogFormat::Json) {
-    line += "{\"ts\":\"" + ts + "\",\"level\":\"" + toString(level) + "\",\"event\":";
-    appendJsonString(line, event);
-    for (const LogField& f : fields) {
-      line += ',';
-      appendJsonString(line, f.key);
-      line += ':';
-      appendValue(line, f, true);
-    }
-    line += "}\n";
-  } else {
-    line += ts + ' ' + toString(level) + ' ';
-    line += event;
-    for (const LogField& f : fields) {
-      line += ' ';
-      line += f.key;
-      line += '=';
-      appendValue(line, f, false);
-    }
-    line += '\n';
-  }
-  if (line.size() > kMaxLogLineBytes) line = cutLine(line, ts, level, event, format_ == LogFormat::Json);
-  std::lock_guard lock(mutex_);
-  std::fwrite(line.data(), 1, line.size(), out_);
-  std::fflush(out_);
+  if (!enabled(level) || !sink_logger_) return;
+  const bool json = format_ == LogFormat::Json;
+  std::string text = body(level, event, fields, json);
+  if (text.size() + 40 > kMaxLogLineBytes) text = cutBody(text, level, event, json);  // 40: the time stamp
+  sink_logger_->log(spdlog::level::info, std::string_view(text));
 }
 
 }  // namespace robodiff::server

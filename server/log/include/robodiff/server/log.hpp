@@ -1,8 +1,9 @@
 #pragma once
 // Structured logs: one line per event on a stream (stderr by default), as JSON objects
 // ({"ts":"2026-11-22T05:24:25.123Z","level":"info","event":"model_loaded","model_id":"...",...})
-// or as text (2026-11-22T05:24:25.123Z info model_loaded model_id=... nq=7). Thread-safe:
-// each line is written whole. Bounded: a string value past kMaxLogValueBytes is cut to a
+// or as text (2026-11-22T05:24:25.123Z info model_loaded model_id=... nq=7), through an
+// spdlog logger (its sink writes each line whole under a mutex, and stamps the UTC time).
+// Bounded: a string value past kMaxLogValueBytes is cut to a
 // prefix and its size; a line still past kMaxLogLineBytes is replaced by one that keeps
 // its start (as the "cut_line" string) and its size.
 
@@ -10,10 +11,14 @@
 #include <cstdint>
 #include <cstdio>
 #include <initializer_list>
-#include <mutex>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <variant>
+
+namespace spdlog {
+class logger;
+}
 
 namespace robodiff::server {
 
@@ -46,9 +51,12 @@ struct LogField {
 class Logger {
  public:
   explicit Logger(std::FILE* out = stderr, LogLevel min_level = LogLevel::Info, LogFormat format = LogFormat::Json);
+  ~Logger();
+  Logger(const Logger&) = delete;
+  Logger& operator=(const Logger&) = delete;
 
   void setLevel(LogLevel level) { min_level_ = level; }
-  void setFormat(LogFormat format) { format_ = format; }
+  void setFormat(LogFormat format);
   bool enabled(LogLevel level) const { return level >= min_level_; }
 
   void log(LogLevel level, std::string_view event, std::initializer_list<LogField> fields = {});
@@ -58,10 +66,9 @@ class Logger {
   void error(std::string_view event, std::initializer_list<LogField> fields = {}) { log(LogLevel::Error, event, fields); }
 
  private:
-  std::FILE* out_;
+  std::shared_ptr<spdlog::logger> sink_logger_;  // null when out was null
   LogLevel min_level_;
   LogFormat format_;
-  std::mutex mutex_;
 };
 
 }  // namespace robodiff::server
