@@ -113,6 +113,7 @@ void runDirect(const Options& o) {
   } else {
     nlohmann::json out = {{"function", fn}, {"nq", model.nq}, {"nv", model.nv}, {"value", result}};
     if (fn == "jacobian") out["frame"] = o.frame, out["reference"] = toString(reference);
+    if (o.state.seed) out["random_state"] = drawnStateJson(*o.state.seed, state);
     std::cout << out.dump() << "\n";
   }
 }
@@ -151,7 +152,7 @@ FunctionSpec computedSpec(const Options& o, const Model& model, const std::optio
 // The runtime inputs of `spec` from the state, in the function's block order: the
 // variable inputs, then the Hessian weights if a Hessian takes them at runtime.
 std::vector<Eigen::VectorXd> runtimeInputs(const Options& o, const Model& model, const FunctionSpec& spec,
-                                           const std::string& label) {
+                                           const std::string& label, State& state_used) {
   int weights = 0;
   for (const OutputSpec& out : spec.outputs)
     if (out.kind == OutputKind::Hessian && !out.fixed_weights) {
@@ -159,6 +160,7 @@ std::vector<Eigen::VectorXd> runtimeInputs(const Options& o, const Model& model,
       weights = rows * cols;
     }
   auto [state, source] = loadState(o, model, weights);
+  state_used = state;
   std::vector<Eigen::VectorXd> runtime;
   for (const std::string& name : functionInfo(spec.function).inputs)
     if (!spec.input(name).fixed) runtime.push_back(require(state, model, name, label, source));
@@ -185,7 +187,8 @@ void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
   const Model model = loadRobot(o.robot);
   const FunctionSpec spec = computedSpec(o, model, loaded);
   const std::string label = o.function.empty() ? toString(spec.function) : o.function;
-  const std::vector<Eigen::VectorXd> runtime = runtimeInputs(o, model, spec, label);
+  State state;
+  const std::vector<Eigen::VectorXd> runtime = runtimeInputs(o, model, spec, label, state);
   const Backend backend = parseBackend(backendName(o, false));
   const SpecFunction f(model, spec, {backend});
   const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
@@ -195,7 +198,9 @@ void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
     printSpecTables(std::cout, model, spec, blockInfos(f), out);
     return;
   }
-  std::cout << specOutputsJson(label, toString(backend), model, spec, blockInfos(f), out).dump() << "\n";
+  nlohmann::json j = specOutputsJson(label, toString(backend), model, spec, blockInfos(f), out);
+  if (o.state.seed) j["random_state"] = drawnStateJson(*o.state.seed, state);
+  std::cout << j.dump() << "\n";
 }
 
 // What the reference backend is for a user function, said wherever its numbers are printed.
@@ -231,6 +236,12 @@ void runUser(const Options& o, const FunctionSpec& spec) {
   nlohmann::json meta = {{"function", spec.functionName()}, {"backend", toString(backend)},
                          {"nq", model.nq}, {"nv", model.nv}};
   if (reference) meta["method"] = {{"values", kUserReferenceValues}, {"derivatives", kUserReferenceDerivatives}};
+  if (o.state.seed) {
+    nlohmann::json drawn = {{"seed", *o.state.seed}};
+    for (std::size_t i = 0; i < inputs.size() && i < runtime.size(); ++i)
+      drawn[inputs[i].name] = std::vector<double>(runtime[i].data(), runtime[i].data() + runtime[i].size());
+    meta["random_state"] = std::move(drawn);
+  }
   std::cout << userOutputsJson(std::move(meta), spec, out).dump() << "\n";
 }
 
@@ -284,7 +295,9 @@ void addComputeCommand(CLI::App& app) {
       "({\"q\": [...], \"u\": [...], ...}) and prints {\"function\", \"backend\", \"nq\", \"nv\"} and one key per "
       "output, its name: a value with one column, a gradient and a vjp as arrays, anything else [rows][cols] "
       "(sparse blocks expanded, a sparse Hessian mirrored to the full matrix). With the reference backend, "
-      "\"method\" says the derivatives are central finite differences.");
+      "\"method\" says the derivatives are central finite differences.\n"
+      "With --random-state SEED the JSON also has \"random_state\": the seed and the arrays drawn, by input name, "
+      "so the same state can be given again with --state FILE.");
   cmd->callback([options] { run(*options); });
 }
 

@@ -79,6 +79,19 @@ State randomState(const Model& model, std::uint64_t seed, int weight_count) {
   return s;
 }
 
+nlohmann::json drawnStateJson(std::uint64_t seed, const State& state) {
+  nlohmann::json j = {{"seed", seed}};
+  auto put = [&](const char* key, const std::optional<Eigen::VectorXd>& v) {
+    if (v) j[key] = std::vector<double>(v->data(), v->data() + v->size());
+  };
+  put("q", state.q);
+  put("v", state.v);
+  put("a", state.a);
+  put("tau", state.tau);
+  put("weights", state.weights);
+  return j;
+}
+
 const Eigen::VectorXd& require(const State& state, const Model& model, const std::string& key,
                                const std::string& what, const std::string& source) {
   const std::optional<Eigen::VectorXd>& value =

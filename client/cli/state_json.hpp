@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "robodiff/model/model.hpp"
 
@@ -25,6 +26,9 @@ State readStateFile(const std::string& path);
 // in [-1, 1], and `weight_count` weights in [-1, 1] if not 0 (drawn last: q, v, a, tau
 // are the same for every weight_count).
 State randomState(const Model& model, std::uint64_t seed, int weight_count = 0);
+// {"seed": N, "q": [...], ...}: what --random-state drew, printed so the state can be
+// reused with --state (the drawn arrays) or the seed.
+nlohmann::json drawnStateJson(std::uint64_t seed, const State& state);
 
 // The vector `key` of the state, checked against the model (length, unit quaternion).
 // `what` names the function that needs it, for the message.

@@ -108,6 +108,33 @@ TEST(ComputeCli, MakeRobotThenComputeAgreesWithTheLibrary) {
   for (const Joint& j : model.joints) EXPECT_NE(r.out.find(j.name), std::string::npos) << r.out;
 }
 
+// --random-state prints what it drew; given back with --state it gives the same numbers,
+// for the direct path, a spec with derivatives, and a user function.
+TEST(ComputeCli, ARandomStateIsPrintedAndReproducible) {
+  TempDir tmp;
+  const std::string robodiff = shellQuote(cliPath().string());
+  const std::string arm7 = shellQuote((testing::sourceDir() / "examples/robots/arm7.urdf").string());
+  const std::vector<std::string> cases = {
+      "--function rnea", "--function aba --derivatives",
+      "--spec " + shellQuote((testing::sourceDir() / "examples/specs/arm7_mpc_knot.json").string())};
+  for (const std::string& what : cases) {
+    testing::ProcessResult r = runCommand(robodiff + " compute --urdf " + arm7 + " " + what + " --random-state 11");
+    ASSERT_EQ(r.exit_code, 0) << what << ": " << r.err;
+    nlohmann::json seeded = nlohmann::json::parse(r.out);
+    ASSERT_TRUE(seeded.contains("random_state")) << r.out;
+    nlohmann::json drawn = seeded["random_state"];
+    EXPECT_EQ(drawn["seed"], 11);
+    drawn.erase("seed");
+    EXPECT_FALSE(drawn.empty());
+    const fs::path state = tmp.file("state.json", drawn.dump());
+    r = runCommand(robodiff + " compute --urdf " + arm7 + " " + what + " --state " + shellQuote(state.string()));
+    ASSERT_EQ(r.exit_code, 0) << what << ": " << r.err;
+    nlohmann::json again = nlohmann::json::parse(r.out);
+    seeded.erase("random_state");
+    EXPECT_EQ(again, seeded) << what;
+  }
+}
+
 struct BadCase {
   std::string label, state, args, expected_message;
 };
