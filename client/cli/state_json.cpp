@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "robodiff/dynamics/configuration.hpp"
+#include "robodiff/language/json_problem.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -35,7 +36,7 @@ nlohmann::json readStateObject(const std::string& path) {
   try {
     j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::parse_error& e) {
-    throw std::invalid_argument(path + ": not valid JSON: " + e.what());
+    throw std::invalid_argument(path + ": not valid JSON: " + language::jsonProblem(e.what()));
   }
   if (!j.is_object()) throw std::invalid_argument(path + ": expected an object {\"q\": [...], \"v\": [...], ...}");
   return j;

@@ -148,7 +148,7 @@ TEST(ComputeCli, BadInputFailsWithAClearMessage) {
       {"short q", R"({"q": [0.1, 0.2], "v": [0,0,0], "a": [0,0,0]})", "--function rnea", "\"q\" has 2 numbers, the model has nq = 3"},
       {"missing v", R"({"q": [0.1, 0.2, 0.3]})", "--function rnea", "no \"v\", needed by rnea"},
       {"not a number", R"({"q": [0.1, "x", 0.3]})", "--function gravity", "\"q\"[1] is \"x\", not a number"},
-      {"invalid json", R"({"q": [0.1, )", "--function gravity", "not valid JSON"},
+      {"invalid json", R"({"q": [0.1, )", "--function gravity", "not valid JSON: line 1, column 13: unexpected end of input"},
       {"unknown frame", R"({"q": [0.1, 0.2, 0.3]})", "--function jacobian --frame nowhere", "no frame named 'nowhere'"},
       {"jacobian without frame", R"({"q": [0.1, 0.2, 0.3]})", "--function jacobian", "--function jacobian needs --frame"},
   };

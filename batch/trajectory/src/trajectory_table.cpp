@@ -13,6 +13,7 @@
 
 #include "robodiff/batch/csv_table.hpp"
 #include "robodiff/batch/trajectory_error.hpp"
+#include "robodiff/language/json_problem.hpp"
 
 namespace robodiff::batch {
 namespace {
@@ -231,7 +232,7 @@ TrajectoryTable parseTrajectoryJson(const std::string& text, const std::string& 
     // The line of the byte where parsing stopped.
     const std::size_t byte = std::min<std::size_t>(e.byte, text.size());
     const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + byte, '\n'));
-    throw TrajectoryError(locationOf(source, line) + "not valid JSON: " + e.what());
+    throw TrajectoryError(locationOf(source, line) + "not valid JSON: " + language::jsonProblem(e.what()));
   }
   TrajectoryTable table;
   table.source = source;

@@ -10,6 +10,7 @@
 #include "robodiff/language/bounded_text.hpp"
 #include "user_function_canonical.hpp"
 #include "user_function_parse.hpp"
+#include "robodiff/language/json_problem.hpp"
 
 namespace robodiff {
 
@@ -181,8 +182,8 @@ class Parser {
     nlohmann::ordered_json ordered;
     try {
       ordered = nlohmann::ordered_json::parse(text);
-    } catch (const nlohmann::ordered_json::parse_error& e) {
-      fail("", std::string("not valid JSON: ") + e.what());
+    } catch (const nlohmann::ordered_json::exception& e) {  // parse_error, and out_of_range for 1e400
+      fail("", "not valid JSON: " + language::jsonProblem(e.what()));
     }
     if (!ordered.is_object()) fail("", "a spec is a JSON object");
     checkNameLengths(ordered, source_);
