@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's generated-code tables: `robodiff bench --markdown` for every robot of
+# docs/benchmarks.md's generated-code tables: `robodiff bench --markdown` for every robot of
 # ../shared/robots (Panda, UR5, Talos with a fixed base, Talos with a floating base),
 # one markdown section per robot on stdout; progress goes to stderr.
 #

@@ -611,7 +611,7 @@ void addBenchCommand(CLI::App& app) {
   auto* json = cmd->add_flag(
       "--json", options->json,
       "Print JSON: one entry per row (name, us_per_call / seconds / bytes / count, ratios, target, status)");
-  auto* md = cmd->add_flag("--markdown", options->markdown, "Print markdown tables (for the README)");
+  auto* md = cmd->add_flag("--markdown", options->markdown, "Print markdown tables (for docs/benchmarks.md)");
   json->excludes(md);
   cmd->add_flag("--quick", options->quick, "Shorter timing (3 batches of ~3 ms instead of 7 of ~20 ms): noisier");
   cmd->add_option("--copies", options->copies,

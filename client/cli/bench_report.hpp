@@ -1,7 +1,7 @@
 // The result of `robodiff bench` for one robot: rows (a time per call, a duration, a
 // size or a count), their ratios to other rows of the same run, targets with PASS/MISS,
 // and figures of other projects to compare with; printed as aligned text, as markdown
-// for the README, or as JSON.
+// for docs/benchmarks.md, or as JSON.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -16,8 +16,8 @@ namespace robodiff::server {
 // The page, as compiled in.
 std::string_view dashboardPage();
 
-// Service::overview() as the JSON the page reads (field by field in the README's
-// "Dashboard" section). Times in seconds, latencies in microseconds.
+// Service::overview() as the JSON the page reads (field by field in docs/service.md,
+// "The dashboard"). Times in seconds, latencies in microseconds.
 std::string overviewJson(const ServiceOverview& overview);
 
 // Routes /, /dashboard (the page) and /api/overview on `server`; `service` outlives it.

@@ -1,6 +1,6 @@
 #pragma once
 // The service's figures (Service::metrics()) as a Prometheus text page for GET /metrics.
-// Families (README "Metrics and probes"): robodiff_up, robodiff_serving_state{state},
+// Families (docs/service.md, "HTTP: metrics, probes, the dashboard"): robodiff_up, robodiff_serving_state{state},
 // robodiff_uptime_seconds, robodiff_requests_total{method,status},
 // robodiff_request_duration_seconds{method} (histogram), robodiff_transport_requests_total
 // and _errors_total{transport}, robodiff_models_loaded, robodiff_functions_loaded,
