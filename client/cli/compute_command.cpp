@@ -236,12 +236,7 @@ void runUser(const Options& o, const FunctionSpec& spec) {
   nlohmann::json meta = {{"function", spec.functionName()}, {"backend", toString(backend)},
                          {"nq", model.nq}, {"nv", model.nv}};
   if (reference) meta["method"] = {{"values", kUserReferenceValues}, {"derivatives", kUserReferenceDerivatives}};
-  if (o.state.seed) {
-    nlohmann::json drawn = {{"seed", *o.state.seed}};
-    for (std::size_t i = 0; i < inputs.size() && i < runtime.size(); ++i)
-      drawn[inputs[i].name] = std::vector<double>(runtime[i].data(), runtime[i].data() + runtime[i].size());
-    meta["random_state"] = std::move(drawn);
-  }
+  if (o.state.seed) meta["random_state"] = drawnInputsJson(*o.state.seed, inputs, runtime);
   std::cout << userOutputsJson(std::move(meta), spec, out).dump() << "\n";
 }
 

@@ -38,11 +38,12 @@ OutputKind kindOf(rpc::OutputKind kind) {
 // The concatenated input blocks the server asks for, from the state (checked against
 // the model, as compute checks them).
 std::vector<double> inputsFor(const EvalArgs& args, const Model& model, const rpc::GetFunctionReply& function,
-                              const std::string& label) {
+                              const std::string& label, nlohmann::json& drawn) {
   int weights = 0;
   for (const rpc::InputBlock& b : function.inputs)
     if (b.name == "weights") weights = static_cast<int>(b.size);
   const auto [state, source] = loadState(args.state, model, weights);
+  if (args.state.seed) drawn = drawnStateJson(*args.state.seed, state);
   std::vector<double> inputs;
   for (const rpc::InputBlock& b : function.inputs) {
     const Eigen::VectorXd& v = b.name == "weights" ? requireWeights(state, weights, label, source)
@@ -64,9 +65,11 @@ std::vector<std::pair<std::string, int>> inputBlocks(const rpc::GetFunctionReply
 
 // A user function's input blocks, read by name from the state (or drawn at random).
 std::vector<double> userInputsFor(const EvalArgs& args, const Model& model, const rpc::GetFunctionReply& function,
-                                  const FunctionSpec& spec) {
+                                  const FunctionSpec& spec, nlohmann::json& drawn) {
   const std::vector<std::pair<std::string, int>> blocks = inputBlocks(function);
-  const auto [runtime, source] = loadUserInputs(args.state, model, spec, userNamedInputs(spec, blocks));
+  const std::vector<NamedInput> named = userNamedInputs(spec, blocks);
+  const auto [runtime, source] = loadUserInputs(args.state, model, spec, named);
+  if (args.state.seed) drawn = drawnInputsJson(*args.state.seed, named, runtime);
   std::vector<double> inputs;
   for (std::size_t b = 0; b < runtime.size(); ++b) {
     if (runtime[b].size() != blocks.at(b).second)
@@ -100,8 +103,9 @@ void eval(const EvalArgs& args) {
   const FunctionSpec spec = parseFunctionSpec(spec_text, args.spec);
   const std::string label = spec.functionName();
 
-  const std::vector<double> inputs =
-      spec.isUser() ? userInputsFor(args, model, function, spec) : inputsFor(args, model, function, label);
+  nlohmann::json drawn;  // what --random-state drew, printed as compute prints it
+  const std::vector<double> inputs = spec.isUser() ? userInputsFor(args, model, function, spec, drawn)
+                                                   : inputsFor(args, model, function, label, drawn);
   std::vector<double> outputs(rpc::outputCount(function));
   check(c->evaluate(function.function_id, inputs, outputs, c.call()), "Evaluate");
 
@@ -133,6 +137,7 @@ void eval(const EvalArgs& args) {
     j = specOutputsJson(label, "service", model, spec, blocks, out);
     j.update(serviceMeta(c, loaded, function));
   }
+  if (!drawn.is_null()) j["random_state"] = std::move(drawn);
   std::cout << j.dump() << "\n";
 }
 

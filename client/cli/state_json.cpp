@@ -93,6 +93,14 @@ nlohmann::json drawnStateJson(std::uint64_t seed, const State& state) {
   return j;
 }
 
+nlohmann::json drawnInputsJson(std::uint64_t seed, const std::vector<NamedInput>& inputs,
+                               const std::vector<Eigen::VectorXd>& values) {
+  nlohmann::json j = {{"seed", seed}};
+  for (std::size_t i = 0; i < inputs.size() && i < values.size(); ++i)
+    j[inputs[i].name] = std::vector<double>(values[i].data(), values[i].data() + values[i].size());
+  return j;
+}
+
 const Eigen::VectorXd& require(const State& state, const Model& model, const std::string& key,
                                const std::string& what, const std::string& source) {
   const std::optional<Eigen::VectorXd>& value =

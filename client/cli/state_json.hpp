@@ -51,6 +51,10 @@ struct NamedInput {
   bool configuration = false;
 };
 
+// {"seed": N, name: [...], ...}: a user function's inputs drawn by --random-state.
+nlohmann::json drawnInputsJson(std::uint64_t seed, const std::vector<NamedInput>& inputs,
+                               const std::vector<Eigen::VectorXd>& values);
+
 // The inputs `wanted`, in order, from the state file at `path`; a missing or wrongly
 // sized input is an error naming it and listing every expected input with its size.
 // Keys not wanted are ignored.

@@ -7,8 +7,7 @@ namespace robodiff::server {
 SegmentIdentity managementSegment(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) return {};
-  return {st.st_dev, st.st_ino, static_cast<long long>(st.st_ctim.tv_sec) * 1'000'000'000LL + st.st_ctim.tv_nsec,
-          true};
+  return {st.st_dev, st.st_ino, true};
 }
 
 RoudiWatch::RoudiWatch(std::function<void(const std::string&)> on_replaced, std::chrono::milliseconds period,

@@ -15,11 +15,11 @@
 
 namespace robodiff::server {
 
-// The identity of a management segment file: device, inode and change time.
+// The identity of a management segment file: device and inode. Not its times: RouDi's
+// writes through its mapping change them while it runs. tmpfs numbers new files afresh.
 struct SegmentIdentity {
   dev_t device = 0;
   ino_t inode = 0;
-  long long changed_ns = 0;
   bool exists = false;
   bool operator==(const SegmentIdentity&) const = default;
 };
