@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev liburdfdom-dev nlohmann-json3-dev libcli11-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev sqlite3
+  libcpp-httplib-dev  # robodiffd's HTTP listener (server/http): /metrics, probes, dashboard
   openssl  # robodiff security: the DDS Security keystore (certificates, S/MIME-signed XML)
   cyclonedds-dev cyclonedds-tools
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev

@@ -1,14 +1,18 @@
 #pragma once
-// A small HTTP/1.1 server for operators' endpoints (metrics, probes): one IPv4 listening
-// socket and one thread multiplexing every connection with poll(), so a slow or silent
-// client never holds up another. GET and HEAD only; one request per connection
-// (`Connection: close`); the request head is limited in size and must arrive within the
-// read timeout, else the client gets 400 or is dropped. Routes are exact paths (the query
-// string is ignored) answered by callbacks on the server thread: they must be quick.
+// robodiffd's HTTP/1.1 server for operators' endpoints (metrics, probes, dashboard):
+// cpp-httplib underneath (http_server.cpp, limited_server.hpp), a thread per connection
+// up to max_connections, so a slow or silent client never holds up another. GET and HEAD
+// only; one request per connection (`Connection: close`); the request head is limited in
+// size and must arrive within the read timeout, else the client gets 400 or is dropped.
+// Routes are exact paths (the query string is ignored) answered by callbacks, one at a
+// time (a mutex), on the connections' threads: they must be quick.
 //
 // Answers: the route's response; 404 for an unknown path; 405 (with Allow) for another
-// method on a known path; 400 for a malformed or oversized head; 421 for a Host header
-// that names another host (host_check.hpp); 500 when a route throws.
+// method on a known path; 400 for a malformed or oversized head (a method httplib does not
+// know, a target not starting with '/', a version other than HTTP/1.0 and 1.1, a header
+// line without ':'); 421 for a Host header that names another host, or an HTTP/1.1
+// request without one (host_check.hpp); 500 when a route throws. Bodies are sent gzip- or
+// brotli-compressed when the client asks (Accept-Encoding), as Debian builds httplib.
 
 #include <chrono>
 #include <cstddef>
@@ -37,9 +41,9 @@ struct HttpServerOptions {
 struct HttpRequest {
   std::string method;  // "GET" or "HEAD"
   std::string target;  // as sent: "/metrics?x=1"
-  std::string path;    // without the query: "/metrics"
+  std::string path;    // without the query, %-decoded: "/metrics"
   std::string query;   // after '?', undecoded
-  std::vector<std::pair<std::string, std::string>> headers;  // names lower-cased
+  std::vector<std::pair<std::string, std::string>> headers;  // names lower-cased, empty values left out
 };
 
 struct HttpResponse {
@@ -51,9 +55,6 @@ struct HttpResponse {
 
 using HttpHandler = std::function<HttpResponse(const HttpRequest&)>;
 
-// "OK", "Not Found", ... for the codes this server sends; "Unknown" otherwise.
-const char* httpReasonPhrase(int status);
-
 class HttpServer {
  public:
   explicit HttpServer(HttpServerOptions options = {});
@@ -64,10 +65,10 @@ class HttpServer {
   // Answers GET and HEAD on `path` (exact match). Before start().
   void route(std::string path, HttpHandler handler);
 
-  // Binds, listens and starts the thread. Throws std::runtime_error naming the address and
+  // Binds, listens and starts the accept thread. Throws std::runtime_error naming the address and
   // the reason (address in use, not an IPv4 address, ...). Once only.
   void start();
-  // Closes the listener and every connection, and joins the thread. Idempotent.
+  // Closes the listener and every connection, and joins the threads. Idempotent.
   void stop();
 
   std::uint16_t port() const;   // the bound port (after start)
