@@ -22,6 +22,7 @@ CREATE TABLE IF NOT EXISTS jobs (
   result_dir TEXT NOT NULL DEFAULT '',
   error TEXT NOT NULL DEFAULT '',
   owner TEXT NOT NULL,
+  caller TEXT NOT NULL DEFAULT '',
   submitted_ms INTEGER NOT NULL,
   started_ms INTEGER NOT NULL DEFAULT 0,
   finished_ms INTEGER NOT NULL DEFAULT 0
@@ -29,7 +30,13 @@ CREATE TABLE IF NOT EXISTS jobs (
 )";
 
 constexpr const char* kColumns =
-    "id, kind, state, params, result, result_dir, error, owner, submitted_ms, started_ms, finished_ms";
+    "id, kind, state, params, result, result_dir, error, owner, submitted_ms, started_ms, finished_ms, caller";
+
+// An index made before jobs had a caller gets the column (its jobs: caller '').
+void addCallerColumn(detail::IndexDatabase& db) {
+  detail::Statement columns(db.handle(), "SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'caller'");
+  if (!columns.step()) db.exec("ALTER TABLE jobs ADD COLUMN caller TEXT NOT NULL DEFAULT ''");
+}
 
 JobRecord rowOf(const detail::Statement& s) {
   JobRecord r;
@@ -44,6 +51,7 @@ JobRecord rowOf(const detail::Statement& s) {
   r.submitted_ms = s.integer(8);
   r.started_ms = s.integer(9);
   r.finished_ms = s.integer(10);
+  r.caller = s.text(11);
   return r;
 }
 
@@ -62,7 +70,10 @@ JobIndex::JobIndex(const fs::path& cache_dir) {
     throw CacheError(CacheError::Kind::Io, "cannot create " + (cache_dir / "jobs").string() + ": " + ec.message());
   fs::permissions(cache_dir / "jobs", fs::perms::owner_all, fs::perm_options::replace, ec);
   impl_ = std::make_unique<Impl>(cache_dir);
-  impl_->db.immediate([&] { impl_->db.exec(kJobsSchema); });
+  impl_->db.immediate([&] {
+    impl_->db.exec(kJobsSchema);
+    addCallerColumn(impl_->db);
+  });
 }
 
 JobIndex::~JobIndex() = default;
@@ -74,8 +85,10 @@ fs::path JobIndex::stagingDir(const std::string& id) const { return jobsDir() / 
 void JobIndex::insert(const JobRecord& r) {
   impl_->db.immediate([&] {
     detail::Statement s(impl_->db.handle(),
-                        "INSERT INTO jobs (id, kind, state, params, owner, submitted_ms) VALUES (?, ?, ?, ?, ?, ?)");
+                        "INSERT INTO jobs (id, kind, state, params, owner, submitted_ms, caller) "
+                        "VALUES (?, ?, ?, ?, ?, ?, ?)");
     s.bind(1, r.id).bind(2, r.kind).bind(3, r.state).bind(4, r.params_json).bind(5, r.owner).bind(6, r.submitted_ms);
+    s.bind(7, r.caller);
     s.run();
   });
 }

@@ -73,7 +73,8 @@ void addSecurityCommand(CLI::App& app) {
   add_client->add_option("dir", client_args->dir, "Keystore directory")->required();
   add_client->add_option("name", client_args->name, "Identity name (letters, digits, - _ .)")->required();
   add_client->add_flag("--operator", client_args->operator_role,
-                       "An operator (certificate OU=operators: may act on other identities' jobs and functions)");
+                       "An operator (writes requests in partition robodiff.operator.<name>: may see and act "
+                       "on every caller's jobs, functions and models)");
   addCommonOptions(add_client, client_args);
   add_client->callback([client_args] {
     const auto role = client_args->operator_role ? client::IdentityRole::Operator : client::IdentityRole::Client;

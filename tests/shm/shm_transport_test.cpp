@@ -165,7 +165,10 @@ TEST_F(ShmTransport, OversizedBatchIsRefusedAndTheProcessSurvives) {
 // INVALID_ARGUMENT (matched by iceoryx sequence id) and keeps serving.
 TEST_F(ShmTransport, MalformedRequestChunksAreInvalidArgument) {
   startServer();
-  iox::popo::UntypedClient raw({"robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service_.c_str()), "rpc"});
+  iox::popo::ClientOptions waits;  // robodiffd connects only clients that wait while its queue is full
+  waits.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
+  iox::popo::UntypedClient raw({"robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service_.c_str()), "rpc"},
+                               waits);
   ASSERT_TRUE(waitUntil([&] { return raw.getConnectionState() == iox::ConnectionState::CONNECTED; }, 3s));
   auto ask = [&](std::uint32_t size, auto&& fill) {
     auto loaned = raw.loan(size, 8);
@@ -243,14 +246,17 @@ TEST_F(ShmTransport, DeadlinesExpire) {
   EXPECT_EQ(out[2], 6.0);
 }
 
+// Four clients (each its own connection: one client's own requests beyond what it may
+// run at once wait in its turn, shm_fairness_test.cpp) fill the service's queue.
 TEST_F(ShmTransport, FullQueueIsResourceExhausted) {
   startServer(/*threads=*/1, /*queue=*/1);
-  auto c = connect(service_);
-  ASSERT_TRUE(c);
+  std::vector<std::unique_ptr<client::ShmConnection>> clients;
+  for (int i = 0; i < 4; ++i) clients.push_back(connect(service_));
   std::atomic<int> exhausted{0}, ok{0};
   std::vector<std::thread> callers;
   for (int i = 0; i < 4; ++i)
-    callers.emplace_back([&] {
+    callers.emplace_back([&, i] {
+      auto& c = clients[i];
       rpc::LoadModelReply model;
       const Status s = c->loadModel({"slow:300", false, ""}, model);
       if (s.code == StatusCode::ResourceExhausted) ++exhausted;

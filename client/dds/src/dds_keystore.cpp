@@ -16,6 +16,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "robodiff/schema/dds_partitions.hpp"
+
 namespace robodiff::client {
 
 namespace fs = std::filesystem;
@@ -137,9 +139,27 @@ std::string governanceXml(const KeystoreOptions& options) {
 )";
 }
 
+// A publish or subscribe rule for one topic, in the given partitions (none: the default one).
+std::string topicRule(const char* action, const std::string& topic, const std::vector<std::string>& partitions) {
+  std::string rule = std::string("<") + action + "><topics><topic>" + topic + "</topic></topics>";
+  if (!partitions.empty()) {
+    rule += "<partitions>";
+    for (const std::string& p : partitions) rule += "<partition>" + p + "</partition>";
+    rule += "</partitions>";
+  }
+  return rule + "</" + action + ">";
+}
+
+// A client publishes requests only in its own caller partition (the server reads the
+// partition as the caller's identity: dds_partitions.hpp); the server reads all of them.
 std::string permissionsXml(std::string_view name, IdentityRole role, const KeystoreOptions& options) {
   const std::string request = options.service_name + "_request", reply = options.service_name + "_reply";
   const bool server = role == IdentityRole::Server;
+  const std::string rules =
+      server ? topicRule("publish", reply, {}) + "\n        " +
+                   topicRule("subscribe", request, dds_codec::serverRequestPartitions())
+             : topicRule("publish", request, {dds_codec::callerPartition(name, role == IdentityRole::Operator)}) +
+                   "\n        " + topicRule("subscribe", reply, {});
   std::ostringstream xml;
   xml << R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
@@ -151,8 +171,7 @@ std::string permissionsXml(std::string_view name, IdentityRole role, const Keyst
       << R"(</not_after></validity>
       <allow_rule>
         )" << kDomains << R"(
-        <publish><topics><topic>)" << (server ? reply : request) << R"(</topic></topics></publish>
-        <subscribe><topics><topic>)" << (server ? request : reply) << R"(</topic></topics></subscribe>
+        )" << rules << R"(
       </allow_rule>
       <default>DENY</default>
     </grant>

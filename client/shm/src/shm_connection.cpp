@@ -409,6 +409,9 @@ std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options, S
 
   iox::popo::ClientOptions client_options;
   client_options.responseQueueCapacity = iox::MAX_RESPONSE_QUEUE_CAPACITY;
+  // robodiffd's request queue blocks a sender while full (never drops another client's
+  // request); it accepts only clients that wait (server/shm: fair sharing).
+  client_options.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
   const iox::capro::ServiceDescription description(
       "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, options.service.c_str()), "rpc");
   impl->port = std::make_unique<iox::popo::UntypedClient>(description, client_options);

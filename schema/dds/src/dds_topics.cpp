@@ -5,11 +5,31 @@
 
 #include "robodiff.h"
 #include "robodiff/schema/dds_domain.hpp"
+#include "robodiff/schema/dds_partitions.hpp"
 
 namespace robodiff::dds_codec {
 
 std::string requestTopicName(std::string_view service) { return std::string(service) + "_request"; }
 std::string replyTopicName(std::string_view service) { return std::string(service) + "_reply"; }
+
+namespace {
+
+// The requests' partitions: the client's caller partition (its permissions' under DDS
+// Security, its user's on open DDS), or every caller partition for the server.
+std::vector<std::string> partitionsOfRequests(DdsEndpoints::Side side, const DdsSecurity& security,
+                                              const std::string& caller_partition) {
+  if (side == DdsEndpoints::Side::Server) return serverRequestPartitions();
+  if (!caller_partition.empty()) return {caller_partition};
+  return {security.enabled() ? permittedCallerPartition(security.permissions) : openCallerPartition()};
+}
+
+void setPartitions(dds_qos_t* qos, const std::vector<std::string>& partitions) {
+  std::vector<const char*> names;
+  for (const std::string& p : partitions) names.push_back(p.c_str());
+  dds_qset_partition(qos, static_cast<uint32_t>(names.size()), names.data());
+}
+
+}  // namespace
 
 std::string ddsError(std::string_view call, dds_return_t code) {
   return std::string(call) + " failed: " + dds_strretcode(code) + " (" + std::to_string(code) + ")";
@@ -17,7 +37,7 @@ std::string ddsError(std::string_view call, dds_return_t code) {
 
 DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Side side,
                            std::chrono::milliseconds writer_blocking, std::chrono::milliseconds lease,
-                           const DdsSecurity& security) {
+                           const DdsSecurity& security, const std::string& caller_partition) {
   const std::string where = [&] {
     return domain_id == kDefaultDomain ? std::string("the default DDS domain")
                                        : "DDS domain " + std::to_string(domain_id);
@@ -31,6 +51,7 @@ DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Si
     throw;
   }
   try {
+    request_partitions_ = partitionsOfRequests(side, security, caller_partition);
     domain_id = prepareDomain(domain_id);
   } catch (...) {
     dds_delete_qos(participant_qos);
@@ -62,10 +83,17 @@ DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Si
     const bool server = side == Side::Server;
     reader_topic_ = server ? request_topic : reply_topic;
     writer_topic_ = server ? reply_topic : request_topic;
-    reader_ = dds_create_reader(participant_, server ? requests : replies, qos, nullptr);
-    writer_ = dds_create_writer(participant_, server ? replies : requests, qos, nullptr);
+    dds_qos_t* request_qos = dds_create_qos();
+    dds_copy_qos(request_qos, qos);
+    setPartitions(request_qos, request_partitions_);
+    reader_ = dds_create_reader(participant_, server ? requests : replies, server ? request_qos : qos, nullptr);
+    writer_ = dds_create_writer(participant_, server ? replies : requests, server ? qos : request_qos, nullptr);
+    dds_delete_qos(request_qos);
     if (reader_ < 0) failure = ddsError("dds_create_reader", reader_) + " for topic " + reader_topic_;
     else if (writer_ < 0) failure = ddsError("dds_create_writer", writer_) + " for topic " + writer_topic_;
+    if ((server ? reader_ : writer_) < 0 && security.enabled())
+      failure += " in partition " + request_partitions_.front() + " (does " + security.describe() +
+                 " grant it? `robodiff security` writes the grants)";
   }
   dds_delete_qos(qos);
   if (!failure.empty()) {

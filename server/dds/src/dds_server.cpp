@@ -8,8 +8,11 @@
 #include <stdexcept>
 #include <thread>
 
+#include "caller_identity.hpp"
 #include "reply_writer.hpp"
 #include "robodiff/schema/dds_codec.hpp"
+#include "robodiff/server/error_budget.hpp"
+#include "robodiff/server/fair_scheduler.hpp"
 
 namespace robodiff::server {
 
@@ -19,7 +22,8 @@ using dds_detail::RequestInfo;
 
 struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
   Core(ServiceApi& s, DdsServerOptions o, Logger& l)
-      : service(s), options(std::move(o)), log(l), replies(s, l, options.max_sample_bytes) {}
+      : service(s), options(std::move(o)), log(l), replies(s, l, options.max_sample_bytes), scheduler(options.fair),
+        refused(options.error_replies_per_second), malformed(options.error_replies_per_second) {}
 
   ServiceApi& service;
   DdsServerOptions options;
@@ -27,6 +31,7 @@ struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
   ReplyWriter replies;
 
   std::unique_ptr<dds_codec::DdsEndpoints> endpoints;
+  std::unique_ptr<dds_detail::DdsCallers> callers;  // who sent a request (caller_identity.hpp)
   dds_entity_t guard = 0;  // wakes the receive thread on stop()
   std::thread receiver;
   std::atomic<bool> stopping{false};
@@ -37,8 +42,21 @@ struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
   std::mutex idle_mutex;
   std::condition_variable idle_cv;
 
+  // Fair sharing (fair_scheduler.hpp): a lane per writer (info.publication), served in
+  // turn; over-quota and unknown-method requests answered within an error budget.
+  struct Queued {
+    std::shared_ptr<WireRequest> sample;
+    RequestInfo info;
+  };
+  FairScheduler<Queued> scheduler;
+  ErrorBudget refused, malformed;
+
   void receiveLoop();
-  void handle(std::shared_ptr<WireRequest> sample, Clock::time_point received);
+  bool drain(dds_entity_t reader);
+  void serve(Queued queued);
+  void postFair(Queued queued);
+  void enqueue(std::shared_ptr<WireRequest> sample, RequestInfo info);
+  void handle(std::shared_ptr<WireRequest> sample, Clock::time_point received, dds_instance_handle_t publication);
   void evaluateInline(const RequestInfo& info, const robodiff_wire_EvaluateRequest& request);
   void post(std::shared_ptr<WireRequest> sample, RequestInfo info);
   void runPosted(const robodiff_wire_Request& sample, const RequestInfo& info);
@@ -55,12 +73,18 @@ namespace {
 
 // Marks one request done (in-flight count) when the last copy of a posted task goes away,
 // whether the task ran or the service dropped it.
+// Also hands the writer's next deferred request to the service (FairScheduler).
 struct InFlight {
-  explicit InFlight(std::shared_ptr<DdsServer::Core> c) : core(std::move(c)) {}
+  InFlight(std::shared_ptr<DdsServer::Core> c, std::uint64_t writer) : core(std::move(c)), client(writer) {}
   InFlight(const InFlight&) = delete;
   InFlight& operator=(const InFlight&) = delete;
-  ~InFlight() { core->done(); }
+  ~InFlight() {
+    auto next = core->scheduler.finishPosted(client);
+    core->done();
+    if (next) core->post(std::move(next->sample), std::move(next->info));
+  }
   std::shared_ptr<DdsServer::Core> core;
+  std::uint64_t client;
 };
 
 }  // namespace
@@ -82,6 +106,7 @@ void DdsServer::start() {
     c.endpoints.reset();
     throw std::runtime_error(dds_codec::ddsError("dds_create_guardcondition", c.guard));
   }
+  c.callers = std::make_unique<dds_detail::DdsCallers>(c.endpoints->reader(), c.options.security.enabled());
   c.replies.setWriter(c.endpoints->writer());
   c.receiver = std::thread([core = core_] { core->receiveLoop(); });
   c.log.info("dds_server_started", {{"domain", c.endpoints->domainId()},
@@ -139,23 +164,82 @@ void DdsServer::Core::receiveLoop() {
   dds_waitset_attach(waitset, guard, 0);
   while (!stopping) {
     dds_waitset_wait(waitset, nullptr, 0, DDS_INFINITY);
+    // Take what the reader holds into the lanes, serve the next writer's request, repeat.
     while (!stopping) {
-      // Taken into memory we own (not a loan), so that a posted task can keep it.
-      auto sample = std::make_shared<WireRequest>();
-      void* buffer[1] = {&sample->get()};
-      dds_sample_info_t info;
-      if (dds_take(reader, buffer, &info, 1, 1) <= 0) break;
-      if (!info.valid_data) continue;  // a writer went away: nothing to answer
-      handle(std::move(sample), Clock::now());
+      drain(reader);
+      auto next = scheduler.next();
+      if (!next) break;
+      serve(std::move(next->item));
     }
   }
   dds_delete(readable);
   dds_delete(waitset);
 }
 
-void DdsServer::Core::handle(std::shared_ptr<WireRequest> sample, Clock::time_point received) {
+// Takes up to kDrainBatch samples (checked, refused or queued in their writer's lane).
+bool DdsServer::Core::drain(dds_entity_t reader) {
+  constexpr int kDrainBatch = 256;
+  int taken = 0;
+  for (; taken < kDrainBatch && !stopping; ++taken) {
+    // Taken into memory we own (not a loan), so that a posted task can keep it.
+    auto sample = std::make_shared<WireRequest>();
+    void* buffer[1] = {&sample->get()};
+    dds_sample_info_t info;
+    if (dds_take(reader, buffer, &info, 1, 1) <= 0) break;
+    if (!info.valid_data) continue;  // a writer went away: nothing to answer
+    handle(std::move(sample), Clock::now(), info.publication_handle);
+  }
+  return taken > 0;
+}
+
+// Into the writer's lane; a writer with limits.max_queued_requests_per_client pending is
+// refused RESOURCE_EXHAUSTED (within its error budget).
+void DdsServer::Core::enqueue(std::shared_ptr<WireRequest> sample, RequestInfo info) {
+  const std::uint64_t client = info.publication;
+  if (scheduler.push(client, Queued{sample, info})) return;
+  const auto d = refused.note(client, info.received);
+  const std::uint32_t quota = scheduler.limits().max_queued;
+  if (d.log)
+    log.warn("dds_client_over_queue_quota", {{"client_id", info.header.client_id}, {"count", d.count},
+                                             {"dropped_unanswered", d.dropped},
+                                             {"max_queued_requests_per_client", quota}});
+  if (d.reply)
+    replies.sendError(info, {StatusCode::ResourceExhausted,
+                             "this client has " + std::to_string(quota) +
+                                 " requests pending, the most one client may have "
+                                 "(limits.max_queued_requests_per_client = " +
+                                 std::to_string(quota) + "); wait for replies before sending more"});
+  done();
+}
+
+// The next request in turn: Evaluate on this thread, the others on the request threads.
+void DdsServer::Core::serve(Queued queued) {
+  const std::uint64_t client = queued.info.publication;
+  if (queued.info.method != rpc::Method::Evaluate) return postFair(std::move(queued));
+  try {
+    evaluateInline(queued.info, queued.sample->get().body._u.evaluate);
+  } catch (const std::exception& e) {
+    log.error("dds_request_failed", {{"method", rpc::toString(queued.info.method)}, {"error", e.what()}});
+    replies.sendError(queued.info,
+                      {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
+  }
+  scheduler.served(client);
+  done();
+}
+
+// At most limits.max_running_requests_per_client of a writer's posted requests are handed
+// to the service at once; each one's end hands over the writer's next (FairScheduler).
+void DdsServer::Core::postFair(Queued queued) {
+  const std::uint64_t client = queued.info.publication;
+  if (!scheduler.startPosted(client, queued)) return;
+  post(std::move(queued.sample), std::move(queued.info));
+}
+
+void DdsServer::Core::handle(std::shared_ptr<WireRequest> sample, Clock::time_point received,
+                             dds_instance_handle_t publication) {
   const robodiff_wire_Request& request = sample->get();
   RequestInfo info;
+  info.publication = publication;
   info.header = dds_codec::fromWire(request.header);
   info.received = received;
   // Addressed to another server: it answers (several servers may share a domain).
@@ -181,20 +265,18 @@ void DdsServer::Core::handle(std::shared_ptr<WireRequest> sample, Clock::time_po
       return;
     }
     if (!method) {
-      // An unknown discriminator (DDS usually drops such samples already: enum validation).
-      log.warn("dds_request_unknown_method", {{"client_id", info.header.client_id},
-                                              {"correlation_id", info.header.correlation_id},
-                                              {"method", static_cast<std::uint64_t>(request.body._d)}});
-      replies.sendUnknownMethod(info, request.body._d);
+      // An unknown discriminator (DDS usually drops such samples already: enum validation):
+      // one log line per writer per second, replies within the error budget.
+      const auto d = malformed.note(info.publication, received);
+      if (d.log)
+        log.warn("dds_request_unknown_method", {{"client_id", info.header.client_id}, {"count", d.count},
+                                                {"dropped_unanswered", d.dropped},
+                                                {"method", static_cast<std::uint64_t>(request.body._d)}});
+      if (d.reply) replies.sendUnknownMethod(info, request.body._d);
       done();
       return;
     }
-    if (*method == rpc::Method::Evaluate) {
-      evaluateInline(info, request.body._u.evaluate);
-      done();
-      return;
-    }
-    post(std::move(sample), std::move(info));
+    enqueue(std::move(sample), std::move(info));
   } catch (const std::exception& e) {
     log.error("dds_request_failed", {{"method", rpc::toString(info.method)}, {"error", e.what()}});
     replies.sendError(info, {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
@@ -221,7 +303,7 @@ void DdsServer::Core::evaluateInline(const RequestInfo& info, const robodiff_wir
 void DdsServer::Core::post(std::shared_ptr<WireRequest> sample, RequestInfo info) {
   // The task keeps the sample (its strings and doubles are read in place) and the shared
   // state; the token ends the request's in-flight count whether the task runs or is dropped.
-  auto token = std::make_shared<InFlight>(shared_from_this());
+  auto token = std::make_shared<InFlight>(shared_from_this(), info.publication);
   ++waiting;
   const bool posted = service.post([core = shared_from_this(), sample, info, token] {
     --core->waiting;
@@ -238,7 +320,8 @@ void DdsServer::Core::post(std::shared_ptr<WireRequest> sample, RequestInfo info
 // A posted method, on one of the service's request threads.
 void DdsServer::Core::runPosted(const robodiff_wire_Request& sample, const RequestInfo& info) {
   try {
-    const CallContext ctx = CallContext::from(info.header, "dds", info.received);
+    CallContext ctx = CallContext::from(info.header, "dds", info.received);
+    ctx.caller = callers->of(info.publication);
     if (ctx.expired()) {
       const auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - info.received);
       return replies.sendError(info, {StatusCode::DeadlineExceeded,

@@ -22,6 +22,7 @@ struct RequestInfo {
   rpc::Method method = rpc::Method::Health;
   Clock::time_point received;
   std::uint32_t knot_count = 0;  // EvaluateBatch: the request's (total_knots of an error reply)
+  dds_instance_handle_t publication = 0;  // the writer that sent it (its partition names the caller)
 };
 
 class ReplyWriter {

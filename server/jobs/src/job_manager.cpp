@@ -40,6 +40,15 @@ std::string newJobId() {
   return text;
 }
 
+// The refusal for another caller's job: names neither the owner nor anything of the job.
+Status notYours(const std::string& job_id) {
+  return {StatusCode::PermissionDenied,
+          "job " + job_id.substr(0, 64) + " belongs to another caller (only its submitter or an operator may see or "
+                                          "cancel it)"};
+}
+
+bool mayActOn(const JobCaller& caller, const std::string& owner) { return caller.operator_ || caller.name == owner; }
+
 rpc::JobState stateFromText(const std::string& s) {
   if (s == "QUEUED") return rpc::JobState::Queued;
   if (s == "RUNNING") return rpc::JobState::Running;
@@ -57,6 +66,7 @@ struct JobManager::Impl {
     workers::JobId pool_id = 0;
     std::shared_future<workers::JobResult> done;
     Clock::time_point started{};
+    std::string caller;  // who submitted it
     bool cancel_requested = false;
     std::string result_json, result_dir;
     std::thread finisher;
@@ -185,6 +195,15 @@ struct JobManager::Impl {
     return info;
   }
 
+  // A job of the index: the live view when this server runs it.
+  rpc::JobInfo infoOf(const cache::JobRecord& r) const {
+    if (const auto job = live(r.id)) {
+      std::lock_guard lock(mutex);
+      return snapshot(*job);
+    }
+    return infoFromRecord(r);
+  }
+
   std::shared_ptr<Job> live(const std::string& id) const {
     std::lock_guard lock(mutex);
     const auto it = jobs.find(id);
@@ -208,7 +227,7 @@ JobManager::~JobManager() {
   impl_->pool.reset();
 }
 
-Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
+Status JobManager::submit(const JobCaller& caller, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
   Impl& m = *impl_;
   if (request.kind.empty()) return {StatusCode::InvalidArgument, "SubmitJob: the job's kind is empty"};
   const json params = json::parse(request.params_json.empty() ? "{}" : request.params_json, nullptr, false);
@@ -230,6 +249,7 @@ Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobRe
   auto job = std::make_shared<Impl::Job>();
   job->info.job_id = newJobId();
   job->info.kind = request.kind;
+  job->caller = caller.name;
   const std::string& id = job->info.job_id;
   const fs::path staging = m.index.stagingDir(id);
   std::error_code ec;
@@ -242,6 +262,7 @@ Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobRe
   record.state = "QUEUED";
   record.params_json = params.dump();
   record.owner = m.owner;
+  record.caller = caller.name;
   record.submitted_ms = unixMs();
   try {
     m.index.insert(record);
@@ -274,51 +295,49 @@ Status JobManager::submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobRe
                                                " jobs are already waiting; try again later"};
   }
   job->finisher = std::thread([&m, job] { m.finish(*job, job->done.get()); });
-  m.log.info("job_submitted", {{"job", id}, {"kind", request.kind}});
+  m.log.info("job_submitted", {{"job", id}, {"kind", request.kind}, {"caller", caller.name}});
   reply.job_id = id;
   return {};
 }
 
-Status JobManager::status(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) {
+Status JobManager::status(const JobCaller& caller, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) {
   Impl& m = *impl_;
   if (!request.job_id.empty()) {
     if (const auto job = m.live(request.job_id)) {
+      if (!mayActOn(caller, job->caller)) return notYours(request.job_id);
       std::lock_guard lock(m.mutex);
       reply.jobs.push_back(m.snapshot(*job));
       return {};
     }
     const auto record = m.index.find(request.job_id);
-    if (!record) return {StatusCode::NotFound, "no job " + request.job_id + " (JobStatus with no id lists them all)"};
+    if (!record) return {StatusCode::NotFound, "no job " + request.job_id + " (JobStatus with no id lists yours)"};
+    if (!mayActOn(caller, record->caller)) return notYours(request.job_id);
     reply.jobs.push_back(m.infoFromRecord(*record));
     return {};
   }
-  reply.jobs = recent(0);
+  for (const cache::JobRecord& r : m.index.list(0))
+    if (mayActOn(caller, r.caller)) reply.jobs.push_back(m.infoOf(r));
   return {};
 }
 
 std::vector<rpc::JobInfo> JobManager::recent(std::size_t limit) {
   Impl& m = *impl_;
   std::vector<rpc::JobInfo> jobs;
-  for (const cache::JobRecord& r : m.index.list(limit)) {
-    if (const auto job = m.live(r.id)) {
-      std::lock_guard lock(m.mutex);
-      jobs.push_back(m.snapshot(*job));
-    } else {
-      jobs.push_back(m.infoFromRecord(r));
-    }
-  }
+  for (const cache::JobRecord& r : m.index.list(limit)) jobs.push_back(m.infoOf(r));
   return jobs;
 }
 
-Status JobManager::cancel(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) {
+Status JobManager::cancel(const JobCaller& caller, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) {
   Impl& m = *impl_;
   const auto job = m.live(request.job_id);
   if (!job) {
     const auto record = m.index.find(request.job_id);
     if (!record) return {StatusCode::NotFound, "no job " + request.job_id};
+    if (!mayActOn(caller, record->caller)) return notYours(request.job_id);
     reply.state = stateFromText(record->state);  // finished under an earlier server
     return {};
   }
+  if (!mayActOn(caller, job->caller)) return notYours(request.job_id);
   {
     std::lock_guard lock(m.mutex);
     job->cancel_requested = true;
@@ -335,13 +354,14 @@ Status JobManager::cancel(const rpc::CancelJobRequest& request, rpc::CancelJobRe
   }
   std::lock_guard lock(m.mutex);
   reply.state = job->info.state;
-  m.log.info("job_cancel", {{"job", request.job_id}, {"state", toString(reply.state)}});
+  m.log.info("job_cancel", {{"job", request.job_id}, {"state", toString(reply.state)}, {"caller", caller.name}});
   return {};
 }
 
-Status JobManager::result(const rpc::JobResultRequest& request, rpc::JobResultReply& reply) {
+Status JobManager::result(const JobCaller& caller, const rpc::JobResultRequest& request, rpc::JobResultReply& reply) {
   Impl& m = *impl_;
   if (const auto job = m.live(request.job_id)) {
+    if (!mayActOn(caller, job->caller)) return notYours(request.job_id);
     std::lock_guard lock(m.mutex);
     reply.info = m.snapshot(*job);
     reply.result_json = job->result_json;
@@ -349,6 +369,7 @@ Status JobManager::result(const rpc::JobResultRequest& request, rpc::JobResultRe
   } else {
     const auto record = m.index.find(request.job_id);
     if (!record) return {StatusCode::NotFound, "no job " + request.job_id};
+    if (!mayActOn(caller, record->caller)) return notYours(request.job_id);
     reply.info = m.infoFromRecord(*record);
     reply.result_json = record->result_json;
     reply.result_dir = record->result_dir;

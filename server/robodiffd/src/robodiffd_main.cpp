@@ -30,6 +30,7 @@
 
 #include "robodiff/batch/batch_job.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/language/json_problem.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
 #include "robodiff/server/dashboard.hpp"
 #include "robodiff/server/dds_server.hpp"
@@ -39,8 +40,8 @@
 #include "robodiff/server/service_metrics_text.hpp"
 #include "robodiff/server/shm_server.hpp"
 #include "dds_exposure.hpp"
-#include "pause_monitor.hpp"
 #include "dds_socket_binding.hpp"
+#include "pause_monitor.hpp"
 #include "roudi_watch.hpp"
 #include "server_config.hpp"
 
@@ -259,7 +260,8 @@ int main(int argc, char** argv) {
                                           robodiff::batch::FileAccess::under(readable_dirs));
         return {};
       } catch (const std::exception& e) {
-        return {robodiff::StatusCode::InvalidArgument, "SubmitJob " + kind + ": " + e.what()};
+        return {robodiff::StatusCode::InvalidArgument,
+                "SubmitJob " + kind + ": " + robodiff::language::jsonProblem(e.what())};
       }
     };
     Service service(config.service, log);
@@ -276,6 +278,8 @@ int main(int argc, char** argv) {
       roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
       ShmServerOptions options;
       options.service = config.shm.service;
+      options.fair = {config.limits.max_queued_requests_per_client, config.limits.max_running_requests_per_client};
+      options.error_replies_per_second = config.limits.error_replies_per_second;
       shm = std::make_unique<ShmServer>(service, options, log);
       if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
         throw std::runtime_error("iceoryx: " + started_shm.message);
@@ -300,6 +304,8 @@ int main(int argc, char** argv) {
       options.service_name = config.dds.service;
       options.max_sample_bytes = config.dds.max_sample_bytes;
       options.security = dds_security;
+      options.fair = {config.limits.max_queued_requests_per_client, config.limits.max_running_requests_per_client};
+      options.error_replies_per_second = config.limits.error_replies_per_second;
       dds = std::make_unique<DdsServer>(service, options, log);
       dds->start();
       confineDdsSockets(log);

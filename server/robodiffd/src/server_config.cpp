@@ -158,6 +158,16 @@ Setting unsignedSetting(const char* key, T ServiceOptions::*field, std::uint64_t
           [field](const ServerConfig& c) { return std::to_string(c.service.*field); }};
 }
 
+// A per-client limit of the transports' fair sharing (ServerConfig::limits).
+Setting clientLimitSetting(const char* key, std::uint32_t ClientLimits::*field) {
+  return {key, [field](ServerConfig& c, const std::string& v) {
+            const std::uint64_t n = parseUnsigned(v, 1u << 20);
+            if (n == 0) throw std::invalid_argument("must be at least 1");
+            c.limits.*field = static_cast<std::uint32_t>(n);
+          },
+          [field](const ServerConfig& c) { return std::to_string(c.limits.*field); }};
+}
+
 const std::vector<Setting>& settings() {
   static const std::vector<Setting> table = {
       {"service.instance_id", [](ServerConfig& c, const std::string& v) { c.service.instance_id = v; },
@@ -178,6 +188,11 @@ const std::vector<Setting>& settings() {
       urdfLimitSetting("service.max_urdf_attribute_length", &UrdfLimits::max_attribute_length),
       {"service.max_spec", [](ServerConfig& c, const std::string& v) { c.service.max_spec_bytes = parseBytes(v); },
        [](const ServerConfig& c) { return formatBytes(c.service.max_spec_bytes); }},
+      clientLimitSetting("limits.max_queued_requests_per_client", &ClientLimits::max_queued_requests_per_client),
+      clientLimitSetting("limits.max_running_requests_per_client", &ClientLimits::max_running_requests_per_client),
+      clientLimitSetting("limits.error_replies_per_second", &ClientLimits::error_replies_per_second),
+      unsignedSetting("limits.max_models_per_client", &ServiceOptions::max_models_per_client, 1u << 20),
+      unsignedSetting("limits.max_functions_per_client", &ServiceOptions::max_functions_per_client, 1u << 20),
       unsignedSetting("build.workers", &ServiceOptions::build_workers, 256),
       {"build.compile", [](ServerConfig& c, const std::string& v) { c.service.compile = parseBool(v); },
        [](const ServerConfig& c) { return std::string(c.service.compile ? "true" : "false"); }},

@@ -42,8 +42,17 @@ struct HttpSettings {
   std::vector<std::string> allowed_hosts;  // Host names accepted besides IPs, localhost, hostname
 };
 
+// Fair sharing between clients over both transports (docs/limits.md, "Fair sharing"): a
+// client is an iceoryx client port or a DDS writer.
+struct ClientLimits {
+  std::uint32_t max_queued_requests_per_client = 64;   // pending (queued or running); more: RESOURCE_EXHAUSTED
+  std::uint32_t max_running_requests_per_client = 2;   // posted requests on the request threads at once
+  std::uint32_t error_replies_per_second = 100;        // per client, to malformed / over-quota requests
+};
+
 struct ServerConfig {
   ServiceOptions service;
+  ClientLimits limits;
   ShmSettings shm;
   DdsSettings dds;
   HttpSettings http;

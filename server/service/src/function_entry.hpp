@@ -12,6 +12,7 @@
 #include <string>
 
 #include "evaluator.hpp"
+#include "holders.hpp"
 #include "latency_histogram.hpp"
 #include "model_entry.hpp"
 #include "robodiff/functions/function_spec.hpp"
@@ -100,8 +101,8 @@ class FunctionEntry {
   void markUnloaded() { unloaded_.store(true, std::memory_order_release); }
   bool unloaded() const { return unloaded_.load(std::memory_order_acquire); }
 
-  // Guarded by the registry's mutex.
-  std::uint32_t references = 0;
+  // GetFunction calls not yet released, per caller. Guarded by the registry's mutex.
+  Holders holders;
 
  private:
   const std::string id_;

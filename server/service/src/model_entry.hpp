@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "holders.hpp"
 #include "robodiff/model/model.hpp"
 
 namespace robodiff::server::detail {
@@ -22,7 +23,7 @@ struct ModelEntry {
   std::vector<std::string> frame_names;
 
   // Guarded by the registry's mutex.
-  std::uint32_t references = 0;  // LoadModel calls not yet released
+  Holders holders;               // LoadModel calls not yet released, per caller
   std::uint32_t functions = 0;   // loaded functions of this model (they keep it loaded)
 
   // What a person calls it: the URDF's robot name, with the source name when one was given.

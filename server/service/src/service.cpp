@@ -225,7 +225,8 @@ Status Service::loadModel(const CallContext& ctx, const rpc::LoadModelRequest& r
       return st;
     }
     detail::Registry::Added added;
-    if (Status st = s.registry.addModel(std::move(candidate), s.options.max_models, added); !st.ok()) return st;
+    if (Status st = s.registry.addModel(std::move(candidate), s.options.max_models, ctx.caller.name, added); !st.ok())
+      return st;
     const detail::ModelEntry& m = *added.model;
     reply.model_id = m.id;
     reply.joint_names = m.joint_names;
@@ -239,7 +240,8 @@ Status Service::loadModel(const CallContext& ctx, const rpc::LoadModelRequest& r
                                 {"floating_base", m.floating_base},
                                 {"new", added.created},
                                 {"references", added.references},
-                                {"client_id", ctx.client_id}});
+                                {"client_id", ctx.client_id},
+                                {"caller", ctx.caller.name}});
     return {};
   });
 }
@@ -275,7 +277,9 @@ Status Service::getFunction(const CallContext& ctx, const rpc::GetFunctionReques
       return std::make_shared<detail::FunctionEntry>(id, std::move(model), spec, request.spec_json, sequence);
     };
     detail::Registry::Added added;
-    if (Status st = s.registry.addFunction(request.model_id, id, s.options.max_functions, make, added); !st.ok())
+    if (Status st =
+            s.registry.addFunction(request.model_id, id, s.options.max_functions, make, ctx.caller.name, added);
+        !st.ok())
       return st;
     detail::FunctionEntry& f = *added.function;
     s.log.info("function_requested", {{"function_id", id},
@@ -284,7 +288,8 @@ Status Service::getFunction(const CallContext& ctx, const rpc::GetFunctionReques
                                       {"new", added.created},
                                       {"references", added.references},
                                       {"state", rpc::toString(f.state())},
-                                      {"client_id", ctx.client_id}});
+                                      {"client_id", ctx.client_id},
+                                      {"caller", ctx.caller.name}});
     if (added.created) s.builds.start(added.function);
 
     if (request.wait && !f.waitSettled(ctx.deadline)) {
@@ -318,7 +323,10 @@ Status Service::listFunctions(const CallContext& ctx, const rpc::ListFunctionsRe
     const std::size_t page_size =
         std::min<std::size_t>(request.page_size == 0 ? rpc::kMaxListFunctionsPage : request.page_size,
                               rpc::kMaxListFunctionsPage);
-    const std::vector<std::shared_ptr<detail::FunctionEntry>> functions = s.registry.functions(model);
+    // A caller lists the functions it holds; an operator every one.
+    std::optional<std::string_view> holder;
+    if (!ctx.caller.operator_) holder = ctx.caller.name;
+    const std::vector<std::shared_ptr<detail::FunctionEntry>> functions = s.registry.functions(model, holder);
     reply = {};
     reply.total = static_cast<std::uint32_t>(functions.size());
     std::size_t bytes = 0;
@@ -344,10 +352,18 @@ Status Service::release(const CallContext& ctx, const rpc::ReleaseRequest& reque
   return guarded(s.log, "Release", [&]() -> Status {
     if (ctx.expired()) return detail::deadlineExceeded(ctx, "Release");
     detail::Registry::Released released;
-    if (Status st = s.registry.release(request.id, released); !st.ok()) return st;
+    if (Status st = s.registry.release(request.id, ctx.caller, released); !st.ok()) {
+      if (st.code == StatusCode::PermissionDenied)
+        s.log.warn("release_refused", {{"id", language::boundedText(request.id)}, {"caller", ctx.caller.name}});
+      return st;
+    }
     reply.references_left = released.references_left;
     s.log.info(released.was_function ? "function_released" : "model_released",
-               {{"id", request.id}, {"references_left", released.references_left}, {"client_id", ctx.client_id}});
+               {{"id", request.id},
+                {"references_left", released.references_left},
+                {"client_id", ctx.client_id},
+                {"caller", ctx.caller.name},
+                {"forced", released.forced}});
     if (released.function_unloaded)
       s.log.info("function_unloaded", {{"function_id", released.function_unloaded->id()},
                                        {"evaluations", released.function_unloaded->evaluations()}});
@@ -360,12 +376,12 @@ Status Service::release(const CallContext& ctx, const rpc::ReleaseRequest& reque
 // (A template over the state: Service::State is private, and deduction needs no name.)
 template <class State, class Request, class Reply>
 static Status jobCall(State& s, const CallContext& ctx, const char* method, const Request& request,
-                      Reply& reply, Status (JobManager::*call)(const Request&, Reply&)) {
+                      Reply& reply, Status (JobManager::*call)(const JobCaller&, const Request&, Reply&)) {
   const InFlight in_flight(s.in_flight);
   return guarded(s.log, method, [&]() -> Status {
     if (ctx.expired()) return detail::deadlineExceeded(ctx, method);
     if (!s.jobs) return ServiceApi::noJobs();
-    return ((*s.jobs).*call)(request, reply);
+    return ((*s.jobs).*call)(JobCaller{ctx.caller.name, ctx.caller.operator_}, request, reply);
   });
 }
 

@@ -34,7 +34,7 @@ struct Service::State {
 
   cache::Cache cache;
   workers::WorkerPool pool;
-  detail::Registry registry;
+  detail::Registry registry{{options.max_models_per_client, options.max_functions_per_client}};
   detail::RequestStats stats;
   detail::FunctionBuilds builds;
   detail::BatchRunner batch;

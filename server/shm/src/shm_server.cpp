@@ -1,4 +1,4 @@
-// The iceoryx transport's server: receive thread, zero-copy Evaluate, posted methods.
+// The iceoryx transport's server: receive thread, fair lanes per client, Evaluate, posted methods.
 #include "robodiff/server/shm_server.hpp"
 
 #include <atomic>
@@ -8,7 +8,6 @@
 #include <mutex>
 #include <optional>
 #include <thread>
-#include <variant>
 #include <vector>
 
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
@@ -18,6 +17,9 @@
 #include "iceoryx_posh/runtime/service_discovery.hpp"
 #include "robodiff/schema/shm_codec.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
+#include "robodiff/server/error_budget.hpp"
+#include "robodiff/server/fair_scheduler.hpp"
+#include "robodiff/server/shm_caller.hpp"
 
 namespace robodiff::server {
 namespace {
@@ -37,6 +39,27 @@ const char* toString(iox::popo::AllocationError error) {
   }
 }
 
+// The iceoryx client port a request came from (the unique id of the client's response
+// queue): the key for fair sharing. iceoryx keeps it protected; a derived type reads it.
+struct ClientPortOf : iox::popo::RequestHeader {
+  static std::uint64_t key(const iox::popo::RequestHeader& routing) {
+    return static_cast<std::uint64_t>(routing.*(&ClientPortOf::m_uniqueClientQueueId));
+  }
+};
+
+// A request taken from iceoryx, its chunk already released: iceoryx's routing header
+// (moved out of the chunk: a plain copy of the client queue id, queue index and sequence
+// id), the parsed header and a copy of the body (view.body points into it).
+struct TakenRequest {
+  explicit TakenRequest(const iox::popo::RequestHeader& r)
+      : routing(std::move(const_cast<iox::popo::RequestHeader&>(r))) {}
+  iox::popo::RequestHeader routing;
+  shm::RequestView view;
+  std::vector<std::byte> body;
+  Clock::time_point received;
+};
+using Taken = std::shared_ptr<TakenRequest>;
+
 }  // namespace
 
 struct ShmServer::Impl {
@@ -55,7 +78,13 @@ struct ShmServer::Impl {
   std::condition_variable idle_cv;
   std::size_t in_flight = 0;
 
-  Impl(ServiceApi& s, ShmServerOptions o, Logger& l) : service(s), options(std::move(o)), log(l) {}
+  // Fair sharing (fair_scheduler.hpp): lanes per client port; bad requests budgeted.
+  FairScheduler<Taken> scheduler;
+  ErrorBudget malformed, refused;
+
+  Impl(ServiceApi& s, ShmServerOptions o, Logger& l)
+      : service(s), options(std::move(o)), log(l), scheduler(options.fair),
+        malformed(options.error_replies_per_second), refused(options.error_replies_per_second) {}
 
   void begin() {
     std::lock_guard lock(idle_mutex);
@@ -118,76 +147,136 @@ struct ShmServer::Impl {
     service.recordRequest(kTransport, method, code, Clock::now() - received);
   }
 
-  // Takes and handles one request; false when none is waiting.
-  bool takeOne() {
-    const void* payload = nullptr;
-    {
-      std::lock_guard lock(port_mutex);
-      auto taken = port->take();
-      if (taken.has_error()) return false;
-      payload = taken.value();
-    }
-    handle(payload);
-    return true;
-  }
+  // ---- the receive thread: drain iceoryx into the lanes, serve one per client in turn --
 
   void receiveLoop() {
     const auto poll = std::chrono::duration_cast<Clock::duration>(options.poll_after_request);
     while (running.load()) {
       waitset->wait();  // woken by a request, or by markForDestruction() in stop()
-      while (running.load() && takeOne()) {
-      }
+      pump();
       // A client's next request often follows its reply within microseconds: poll a
       // little before sleeping again, which saves the WaitSet wake-up.
       for (auto until = Clock::now() + poll; running.load() && Clock::now() < until;) {
-        if (takeOne()) until = Clock::now() + poll;
+        if (pump()) until = Clock::now() + poll;
         else std::this_thread::yield();
       }
     }
   }
 
-  void handle(const void* payload) {
+  // Until the lanes are empty: take what iceoryx holds, then serve the next client's
+  // request. Draining between turns keeps iceoryx's shared request queue short (a full
+  // one discards its oldest request, whoever sent it). True when anything happened.
+  bool pump() {
+    bool any = false;
+    while (running.load()) {
+      any |= drain();
+      auto next = scheduler.next();
+      if (!next) break;
+      serve(next->client, std::move(next->item));
+      any = true;
+    }
+    return any;
+  }
+
+  // Takes up to a queue's worth of waiting requests into the lanes. iceoryx's request
+  // queue (overflowing: a full one drops its oldest) fails a take now and then while a
+  // client is overflowing it: retry while it says it holds requests, a bounded number of
+  // times, so that a flooding client never makes the queue look empty.
+  bool drain() {
+    std::uint64_t taken = 0;
+    for (int retries = 0; taken < options.request_queue_capacity;) {
+      const void* payload = nullptr;
+      {
+        std::lock_guard lock(port_mutex);
+        auto t = port->take();
+        if (t.has_error()) {
+          if (t.get_error() == iox::popo::ServerRequestResult::NO_PENDING_REQUESTS && port->hasRequests() &&
+              ++retries < kTakeRetries)
+            continue;
+          break;
+        }
+        payload = t.value();
+      }
+      intake(payload);
+      ++taken;
+    }
+    return taken > 0;
+  }
+  static constexpr int kTakeRetries = 256;
+
+  // One request chunk: checked, refused or copied into its client's lane; always released.
+  void intake(const void* payload) {
     const auto received = Clock::now();
     const auto& routing = *iox::popo::RequestHeader::fromPayload(payload);
+    const std::uint64_t client = ClientPortOf::key(routing);
     shm::RequestView view;
     if (Status s = shm::parseRequest(payload, payloadSize(payload), view); !s.ok()) {
-      log.warn("shm_bad_request", {{"message", s.message}});
-      sendReply(routing, view.header, view.method, s, {});
+      const auto d = malformed.note(client, received);
+      if (d.log)
+        log.warn("shm_bad_requests", {{"client_port", client}, {"count", d.count}, {"dropped_unanswered", d.dropped},
+                                      {"message", s.message}});
+      if (d.reply) {
+        sendReply(routing, view.header, view.method, s, {});
+        record(view.method, s.code, received);
+      }
       release(payload);
-      record(view.method, s.code, received);
       return;
     }
     if (!accepting.load()) {
       Status s{StatusCode::Unavailable, "the server is draining (shutting down); retry on another server"};
-      sendReply(routing, view.header, view.method, s, {});
-      release(payload);
-      record(view.method, s.code, received);
-      return;
+      return refuse(payload, routing, view, std::move(s), received);
     }
     if (Status s = service.admit(view.header); !s.ok()) {
       const bool other_server = s.code == StatusCode::NotFound && !view.header.server_instance_id.empty() &&
                                 view.header.server_instance_id != service.instanceId();
-      if (!other_server) sendReply(routing, view.header, view.method, s, {});  // else: not ours to answer
-      release(payload);
-      if (!other_server) record(view.method, s.code, received);
+      if (!other_server) return refuse(payload, routing, view, std::move(s), received);
+      release(payload);  // not ours to answer
       return;
     }
-    if (view.method == rpc::Method::EvaluateBatch) {
-      postBatch(payload, routing, std::move(view), received);
-      return;
-    }
-    if (view.method == rpc::Method::Evaluate) {
-      begin();
-      const Status s = evaluate(routing, view, received);
-      release(payload);
-      record(view.method, s.code, received);
-      end();
-      return;
-    }
-    post(payload, routing, std::move(view), received);
+    auto taken = std::make_shared<TakenRequest>(routing);
+    taken->view = std::move(view);
+    taken->body.assign(taken->view.body.begin(), taken->view.body.end());
+    taken->view.body = taken->body;
+    taken->received = received;
+    release(payload);
+    if (scheduler.push(client, taken)) begin();  // in flight until answered (waitIdle)
+    else overQuota(client, *taken);
   }
 
-  // Evaluate / EvaluateBatch on this thread, request chunk -> response chunk.
+  void refuse(const void* payload, const iox::popo::RequestHeader& routing, const shm::RequestView& view, Status s,
+              Clock::time_point received) {
+    sendReply(routing, view.header, view.method, s, {});
+    release(payload);
+    record(view.method, s.code, received);
+  }
+
+  // A client with max_queued requests pending: RESOURCE_EXHAUSTED, within its error budget.
+  void overQuota(std::uint64_t client, const TakenRequest& r) {
+    const auto d = refused.note(client, r.received);
+    const std::uint32_t quota = scheduler.limits().max_queued;
+    if (d.log)
+      log.warn("shm_client_over_queue_quota", {{"client_port", client}, {"client_id", r.view.header.client_id},
+                                               {"count", d.count}, {"dropped_unanswered", d.dropped},
+                                               {"max_queued_requests_per_client", quota}});
+    if (!d.reply) return;
+    Status s{StatusCode::ResourceExhausted,
+             "this client has " + std::to_string(quota) +
+                 " requests pending, the most one client may have (limits.max_queued_requests_per_client = " +
+                 std::to_string(quota) + "); wait for replies before sending more"};
+    sendReply(r.routing, r.view.header, r.view.method, s, {});
+    record(r.view.method, s.code, r.received);
+  }
+
+  // The next request in turn: Evaluate here, the others on the request threads.
+  void serve(std::uint64_t client, Taken taken) {
+    if (taken->view.method != rpc::Method::Evaluate) return post(client, std::move(taken));
+    const Status s = evaluate(taken->routing, taken->view, taken->received);
+    scheduler.served(client);
+    record(taken->view.method, s.code, taken->received);
+    end();
+  }
+
+  // Evaluate / EvaluateBatch: request body -> response chunk.
   Status evaluate(const iox::popo::RequestHeader& routing, const shm::RequestView& view,
                   Clock::time_point received) {
     const bool batch = view.method == rpc::Method::EvaluateBatch;
@@ -248,155 +337,69 @@ struct ShmServer::Impl {
     return s;
   }
 
-  // A decoded request of a posted method, with what is needed to reply once the request
-  // chunk is released: iceoryx's routing header (moved out of the chunk: a plain copy of
-  // the client queue id, queue index and sequence id).
-  struct Posted {
-    explicit Posted(const iox::popo::RequestHeader& r)
-        : routing(std::move(const_cast<iox::popo::RequestHeader&>(r))) {}
-    iox::popo::RequestHeader routing;
-    rpc::RequestHeader header;
-    rpc::Method method = rpc::Method::Health;
-    Clock::time_point received;
-    std::variant<rpc::LoadModelRequest, rpc::GetFunctionRequest, rpc::ListFunctionsRequest, rpc::HealthRequest,
-                 rpc::ReleaseRequest, rpc::SubmitJobRequest, rpc::JobStatusRequest, rpc::CancelJobRequest,
-                 rpc::JobResultRequest>
-        request;
-  };
+  // ---- posted methods: on the request threads, at most max_running per client ---------
 
-  template <class Request>
-  Status decodeInto(Posted& posted, std::span<const std::byte> body) {
+  // Hands a request to the service's request threads, or keeps it until one of the
+  // client's running requests finishes (FairScheduler::startPosted).
+  void post(std::uint64_t client, Taken taken) {
+    if (scheduler.startPosted(client, taken)) hand(client, std::move(taken));
+  }
+
+  void hand(std::uint64_t client, Taken taken) {
+    const bool queued = service.post([this, client, taken] {
+      const Status sent = runPosted(*taken);
+      record(taken->view.method, sent.code, taken->received);
+      finished(client);
+    });
+    if (queued) return;
+    Status busy{StatusCode::ResourceExhausted, std::string("the server's request queue is full; ") +
+                                                   rpc::toString(taken->view.method) + " refused, retry later"};
+    sendReply(taken->routing, taken->view.header, taken->view.method, busy, {});
+    record(taken->view.method, busy.code, taken->received);
+    finished(client);
+  }
+
+  // One of the client's posted requests was answered: hand over its next, if any.
+  void finished(std::uint64_t client) {
+    std::optional<Taken> next = scheduler.finishPosted(client);
+    end();
+    if (next) hand(client, std::move(*next));
+  }
+
+  template <class Request, class Reply>
+  Status call(const TakenRequest& r, const CallContext& ctx,
+              Status (ServiceApi::*method)(const CallContext&, const Request&, Reply&)) {
     Request request;
-    Status s = shm::decode(body, request);
-    posted.request = std::move(request);
-    return s;
-  }
-
-  void post(const void* payload, const iox::popo::RequestHeader& routing, shm::RequestView view,
-            Clock::time_point received) {
-    auto posted = std::make_shared<Posted>(routing);
-    posted->header = std::move(view.header);
-    posted->method = view.method;
-    posted->received = received;
-    Status s;
-    switch (view.method) {
-      case rpc::Method::LoadModel: s = decodeInto<rpc::LoadModelRequest>(*posted, view.body); break;
-      case rpc::Method::GetFunction: s = decodeInto<rpc::GetFunctionRequest>(*posted, view.body); break;
-      case rpc::Method::ListFunctions: s = decodeInto<rpc::ListFunctionsRequest>(*posted, view.body); break;
-      case rpc::Method::Health: s = decodeInto<rpc::HealthRequest>(*posted, view.body); break;
-      case rpc::Method::Release: s = decodeInto<rpc::ReleaseRequest>(*posted, view.body); break;
-      case rpc::Method::SubmitJob: s = decodeInto<rpc::SubmitJobRequest>(*posted, view.body); break;
-      case rpc::Method::JobStatus: s = decodeInto<rpc::JobStatusRequest>(*posted, view.body); break;
-      case rpc::Method::CancelJob: s = decodeInto<rpc::CancelJobRequest>(*posted, view.body); break;
-      case rpc::Method::JobResult: s = decodeInto<rpc::JobResultRequest>(*posted, view.body); break;
-      default: s = {StatusCode::Unimplemented, "method not served by posting"}; break;
-    }
-    release(payload);  // everything needed is in `posted` now
-    if (!s.ok()) {
-      sendReply(posted->routing, posted->header, posted->method, s, {});
-      record(posted->method, s.code, received);
-      return;
-    }
-    begin();
-    const bool queued = service.post([this, posted] {
-      const Status sent = run(*posted);
-      record(posted->method, sent.code, posted->received);
-      end();
-    });
-    if (!queued) {
-      end();
-      Status busy{StatusCode::ResourceExhausted, std::string("the server's request queue is full; ") +
-                                                     rpc::toString(posted->method) + " refused, retry later"};
-      sendReply(posted->routing, posted->header, posted->method, busy, {});
-      record(posted->method, busy.code, received);
-    }
-  }
-
-  // EvaluateBatch runs on a request thread (a long batch must not hold up other clients'
-  // Evaluate calls on the receive thread). iceoryx lets a server hold 4 request chunks at
-  // once: up to kHeldBatches batches keep theirs (inputs read in place, no copy); beyond
-  // that a batch's request is copied and its chunk released, so the receive thread can
-  // always take the next request.
-  static constexpr int kHeldBatches = 2;
-  std::atomic<int> held_batches{0};
-
-  void postBatch(const void* payload, const iox::popo::RequestHeader& routing, shm::RequestView view,
-                 Clock::time_point received) {
-    struct Batch {
-      std::shared_ptr<iox::popo::RequestHeader> routing_copy;  // set when the chunk was released
-      std::vector<std::byte> copy;                             // the request, when copied
-      const void* payload = nullptr;                           // the held chunk, otherwise
-      shm::RequestView view;
-    };
-    auto batch = std::make_shared<Batch>();
-    if (held_batches.fetch_add(1) < kHeldBatches) {
-      batch->payload = payload;
-      batch->view = std::move(view);
-    } else {
-      held_batches.fetch_sub(1);
-      const auto* bytes = static_cast<const std::byte*>(payload);
-      batch->copy.assign(bytes, bytes + payloadSize(payload));
-      batch->routing_copy = std::make_shared<iox::popo::RequestHeader>(
-          std::move(const_cast<iox::popo::RequestHeader&>(routing)));
-      const Status parsed = shm::parseRequest(batch->copy.data(), batch->copy.size(), batch->view);
-      release(payload);
-      if (!parsed.ok()) {  // cannot happen: the chunk parsed a moment ago
-        sendReply(*batch->routing_copy, batch->view.header, rpc::Method::EvaluateBatch, parsed, {});
-        record(rpc::Method::EvaluateBatch, parsed.code, received);
-        return;
-      }
-    }
-    auto routingOf = [batch] () -> const iox::popo::RequestHeader& {
-      return batch->routing_copy ? *batch->routing_copy : *iox::popo::RequestHeader::fromPayload(batch->payload);
-    };
-    auto finish = [this, batch] {
-      if (batch->payload != nullptr) {
-        release(batch->payload);
-        held_batches.fetch_sub(1);
-      }
-    };
-    begin();
-    const bool queued = service.post([this, batch, routingOf, finish, received] {
-      const Status s = evaluate(routingOf(), batch->view, received);
-      finish();
-      record(rpc::Method::EvaluateBatch, s.code, received);
-      end();
-    });
-    if (!queued) {
-      Status busy{StatusCode::ResourceExhausted, "the server's request queue is full; EvaluateBatch refused, retry later"};
-      sendReply(routingOf(), batch->view.header, rpc::Method::EvaluateBatch, busy, {});
-      finish();
-      record(rpc::Method::EvaluateBatch, busy.code, received);
-      end();
-    }
+    Status s = shm::decode(r.view.body, request);
+    Reply reply;
+    if (s.ok()) s = (service.*method)(ctx, request, reply);
+    std::vector<std::byte> body;
+    if (s.ok()) body = shm::encode(reply);
+    return sendReply(r.routing, r.view.header, r.view.method, std::move(s), body);
   }
 
   // Runs a posted method on a request thread and sends its reply.
-  Status run(Posted& posted) {
-    const auto ctx = CallContext::from(posted.header, kTransport, posted.received);
+  Status runPosted(const TakenRequest& r) {
+    if (r.view.method == rpc::Method::EvaluateBatch) return evaluate(r.routing, r.view, r.received);
+    auto ctx = CallContext::from(r.view.header, kTransport, r.received);
+    ctx.caller = shm_detail::callerOfShmClient(r.view.header.client_id);  // shm_caller.hpp
     if (ctx.expired())
-      return sendReply(posted.routing, posted.header, posted.method,
+      return sendReply(r.routing, r.view.header, r.view.method,
                        {StatusCode::DeadlineExceeded, "the deadline passed while the request was queued"}, {});
-    auto call = [&](auto& request, auto reply, auto method) {
-      Status s = (service.*method)(ctx, request, reply);
-      std::vector<std::byte> body;
-      if (s.ok()) body = shm::encode(reply);
-      return sendReply(posted.routing, posted.header, posted.method, std::move(s), body);
-    };
-    return std::visit(
-        [&](auto& request) -> Status {
-          using T = std::decay_t<decltype(request)>;
-          if constexpr (std::is_same_v<T, rpc::LoadModelRequest>) return call(request, rpc::LoadModelReply{}, &ServiceApi::loadModel);
-          else if constexpr (std::is_same_v<T, rpc::GetFunctionRequest>) return call(request, rpc::GetFunctionReply{}, &ServiceApi::getFunction);
-          else if constexpr (std::is_same_v<T, rpc::ListFunctionsRequest>) return call(request, rpc::ListFunctionsReply{}, &ServiceApi::listFunctions);
-          else if constexpr (std::is_same_v<T, rpc::HealthRequest>) return call(request, rpc::HealthReply{}, &ServiceApi::health);
-          else if constexpr (std::is_same_v<T, rpc::ReleaseRequest>) return call(request, rpc::ReleaseReply{}, &ServiceApi::release);
-          else if constexpr (std::is_same_v<T, rpc::SubmitJobRequest>) return call(request, rpc::SubmitJobReply{}, &ServiceApi::submitJob);
-          else if constexpr (std::is_same_v<T, rpc::JobStatusRequest>) return call(request, rpc::JobStatusReply{}, &ServiceApi::jobStatus);
-          else if constexpr (std::is_same_v<T, rpc::CancelJobRequest>) return call(request, rpc::CancelJobReply{}, &ServiceApi::cancelJob);
-          else return call(request, rpc::JobResultReply{}, &ServiceApi::jobResult);
-        },
-        posted.request);
+    switch (r.view.method) {
+      case rpc::Method::LoadModel: return call(r, ctx, &ServiceApi::loadModel);
+      case rpc::Method::GetFunction: return call(r, ctx, &ServiceApi::getFunction);
+      case rpc::Method::ListFunctions: return call(r, ctx, &ServiceApi::listFunctions);
+      case rpc::Method::Health: return call(r, ctx, &ServiceApi::health);
+      case rpc::Method::Release: return call(r, ctx, &ServiceApi::release);
+      case rpc::Method::SubmitJob: return call(r, ctx, &ServiceApi::submitJob);
+      case rpc::Method::JobStatus: return call(r, ctx, &ServiceApi::jobStatus);
+      case rpc::Method::CancelJob: return call(r, ctx, &ServiceApi::cancelJob);
+      case rpc::Method::JobResult: return call(r, ctx, &ServiceApi::jobResult);
+      default:
+        return sendReply(r.routing, r.view.header, r.view.method,
+                         {StatusCode::Unimplemented, "method not served by posting"}, {});
+    }
   }
 };
 
@@ -439,6 +442,12 @@ Status ShmServer::start() {
   iox::popo::ServerOptions server_options;
   server_options.requestQueueCapacity =
       std::clamp<std::uint64_t>(d.options.request_queue_capacity, 1, iox::MAX_REQUEST_QUEUE_CAPACITY);
+  // A full request queue makes the sender wait instead of dropping the oldest request,
+  // which would let a flooding client push every other client's requests out. iceoryx
+  // connects only clients that agree to wait (ClientOptions::serverTooSlowPolicy =
+  // WAIT_FOR_CONSUMER); the receive thread drains the queue at once, so a sender waits
+  // only while a flooder is filling it.
+  server_options.requestQueueFullPolicy = iox::popo::QueueFullPolicy::BLOCK_PRODUCER;
   const iox::capro::ServiceDescription description(
       "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, d.options.service.c_str()), "rpc");
   // RouDi allows one server per service and aborts a process asking for a second one.
@@ -476,6 +485,12 @@ void ShmServer::stop() {
   if (!d.running.exchange(false)) return;
   d.waitset->markForDestruction();
   if (d.receiver.joinable()) d.receiver.join();
+  // Requests still in the lanes are not answered (their clients time out, as for those
+  // still in iceoryx's queue); they no longer count as in flight.
+  while (auto next = d.scheduler.next()) {
+    d.scheduler.served(next->client);
+    d.end();
+  }
   {
     // Posted tasks refer to this server: wait for them all.
     std::unique_lock lock(d.idle_mutex);

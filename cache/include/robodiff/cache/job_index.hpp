@@ -25,6 +25,7 @@ struct JobRecord {
   std::string result_dir;   // SUCCEEDED: its files
   std::string error;        // FAILED / CANCELLED: why
   std::string owner;        // the server process that ran it (host:pid:start-time:nonce)
+  std::string caller;       // who submitted it ("dds:alice", "user:bob"; '' before callers were recorded)
   std::int64_t submitted_ms = 0, started_ms = 0, finished_ms = 0;  // Unix milliseconds; 0: not yet
 };
 

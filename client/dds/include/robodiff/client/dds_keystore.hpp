@@ -14,8 +14,9 @@
 namespace robodiff::client {
 
 enum class IdentityRole {
-  Client,    // publishes requests, reads replies
-  Operator,  // a client whose certificate says OU=operators (may act on others' jobs)
+  Client,    // publishes requests (in partition robodiff.caller.<name> only), reads replies
+  Operator,  // a client publishing in robodiff.operator.<name> (may act on others' jobs and
+             // functions); its certificate also says OU=operators
   Server,    // reads requests, publishes replies
 };
 

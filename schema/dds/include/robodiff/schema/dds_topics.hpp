@@ -3,6 +3,8 @@
 // "<service>_request" (robodiff::wire::Request, clients write, servers read) and
 // "<service>_reply" (robodiff::wire::Reply, servers write, clients read). QoS on both:
 // RELIABLE and KEEP_ALL, so that no request or reply is dropped for lack of history.
+// Requests travel in caller partitions (dds_partitions.hpp): a client writes in its own,
+// the server reads in all; replies in the default partition.
 
 #include <dds/dds.h>
 
@@ -10,6 +12,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "robodiff/schema/dds_security.hpp"
 
@@ -36,9 +39,12 @@ class DdsEndpoints {
   // lease: the participant's lease duration (how soon peers notice this process died);
   // 0 keeps the configuration's (Discovery/LeaseDuration, 10 s by default).
   // security: DDS Security identity of the participant (none: an open participant).
+  // caller_partition: a client's request partition; empty: the one its permissions grant
+  // (DDS Security), else its OS user's (open DDS).
   DdsEndpoints(std::uint32_t domain_id, std::string_view service, Side side,
                std::chrono::milliseconds writer_blocking = std::chrono::seconds(1),
-               std::chrono::milliseconds lease = std::chrono::milliseconds(0), const DdsSecurity& security = {});
+               std::chrono::milliseconds lease = std::chrono::milliseconds(0), const DdsSecurity& security = {},
+               const std::string& caller_partition = {});
   ~DdsEndpoints();
   DdsEndpoints(const DdsEndpoints&) = delete;
   DdsEndpoints& operator=(const DdsEndpoints&) = delete;
@@ -49,11 +55,14 @@ class DdsEndpoints {
   std::uint32_t domainId() const { return domain_id_; }  // the actual id (the default resolved)
   const std::string& writerTopic() const { return writer_topic_; }
   const std::string& readerTopic() const { return reader_topic_; }
+  // The partitions of the request writer (client) or reader (server).
+  const std::vector<std::string>& requestPartitions() const { return request_partitions_; }
 
  private:
   dds_entity_t participant_ = 0, reader_ = 0, writer_ = 0;
   std::uint32_t domain_id_ = 0;
   std::string writer_topic_, reader_topic_;
+  std::vector<std::string> request_partitions_;
 };
 
 }  // namespace robodiff::dds_codec

@@ -27,11 +27,26 @@ namespace robodiff::server {
 
 using Clock = std::chrono::steady_clock;
 
+// Who is calling, as the transport established it (deploy/security.md, "Ownership"). Models,
+// functions and jobs belong to the caller that made them; only an operator acts on others'.
+//   "dds:alice"  a DDS Security identity (authenticated: its certificate and signed permissions)
+//   "user:alice" an OS user: over iceoryx from the client process's uid, over open DDS as the
+//                client claims it (advisory only)
+//   "local"      the process itself (in-process use, tests): owner of what it made
+struct Caller {
+  std::string name = "local";
+  bool operator_ = false;      // may see and act on every caller's jobs, functions and models
+  bool authenticated = false;  // proven by DDS Security, not claimed or inferred
+
+  bool mayActOn(std::string_view owner) const { return operator_ || owner == name; }
+};
+
 // Who asked, and until when the answer is useful.
 struct CallContext {
   std::string_view transport;          // "iceoryx", "dds", "inproc"
   std::string_view client_id;
   std::uint64_t correlation_id = 0;
+  Caller caller;                       // set by the transport for the methods that need it
   Clock::time_point received = Clock::now();
   Clock::time_point deadline = Clock::time_point::max();  // received + the request's budget
 

@@ -3,6 +3,10 @@
 // requests on "<service>_request" and answers on "<service>_reply":
 //  - requests addressed to another server instance are dropped silently (it answers them);
 //  - ServiceApi::admit() refusing a request is answered at once with its status;
+//  - the others wait in their writer's lane (fair_scheduler.hpp): writers are served one
+//    request each in turn; a writer with fair.max_queued pending is refused
+//    RESOURCE_EXHAUSTED, and at most fair.max_running of its posted requests are in the
+//    service at once;
 //  - Evaluate runs inline on the receive thread (shape, then evaluate() straight into the
 //    reply sample's buffer);
 //  - every other method is handed to ServiceApi::post(); a full queue is answered
@@ -22,6 +26,7 @@
 
 #include "robodiff/schema/dds_topics.hpp"
 #include "robodiff/server/log.hpp"
+#include "robodiff/server/fair_scheduler.hpp"
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::server {
@@ -43,6 +48,12 @@ struct DdsServerOptions {
   // DDS Security identity (dds_codec::keystoreIdentity); none: an open participant that
   // any process reaching the domain may call.
   dds_codec::DdsSecurity security;
+  // Per writer (client): requests pending and posted requests running at once (limits.*);
+  // requests are served one per writer in turn (fair_scheduler.hpp).
+  FairLimits fair;
+  // Error replies per writer per second to unknown-method or over-quota requests; the
+  // rest are dropped unanswered.
+  std::uint32_t error_replies_per_second = 100;
 };
 
 class DdsServer {

@@ -40,6 +40,14 @@ struct JobManagerOptions {
       validate;
 };
 
+// Who asks (the service's Caller, deploy/security.md "Ownership"): a job belongs to the
+// caller that submitted it; JobStatus, CancelJob and JobResult of another caller's job are
+// PERMISSION_DENIED and job listings leave it out, unless the caller is an operator.
+struct JobCaller {
+  std::string name;
+  bool operator_ = false;
+};
+
 struct JobCounts {
   std::uint32_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
 };
@@ -54,15 +62,17 @@ class JobManager {
   JobManager(const JobManager&) = delete;
   JobManager& operator=(const JobManager&) = delete;
 
-  Status submit(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply);
-  // An empty id lists every job in the index (this server's and earlier ones').
-  Status status(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply);
+  Status submit(const JobCaller& caller, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply);
+  // An empty id lists the caller's jobs in the index (this server's and earlier ones'; an
+  // operator's: every job).
+  Status status(const JobCaller& caller, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply);
   // The newest `limit` jobs in the index (0: all), newest first; live ones as they run.
+  // Every caller's (the dashboard).
   std::vector<rpc::JobInfo> recent(std::size_t limit);
   // Waits (up to 2 s) until a running job's worker is gone, so the reply's state is final.
-  Status cancel(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply);
+  Status cancel(const JobCaller& caller, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply);
   // FAILED_PRECONDITION until the job has succeeded; NOT_FOUND for an unknown id.
-  Status result(const rpc::JobResultRequest& request, rpc::JobResultReply& reply);
+  Status result(const JobCaller& caller, const rpc::JobResultRequest& request, rpc::JobResultReply& reply);
 
   JobCounts counts() const;
 

@@ -36,6 +36,10 @@ struct ServiceOptions {
   std::uint32_t max_batch_knots = 100000;    // beyond: RESOURCE_EXHAUSTED
   std::size_t max_models = 64;               // beyond: RESOURCE_EXHAUSTED
   std::size_t max_functions = 1024;          // loaded or being built; failed ones are unloaded
+  // Per caller (CallContext::caller): models and functions held (loaded, not released);
+  // beyond: RESOURCE_EXHAUSTED naming the limit. So one client cannot take every slot.
+  std::size_t max_models_per_client = 32;
+  std::size_t max_functions_per_client = 512;
   std::size_t max_spec_bytes = std::size_t{1} << 20;  // a GetFunction spec; beyond: RESOURCE_EXHAUSTED
   std::size_t max_urdf_bytes = std::size_t{16} << 20;  // beyond: RESOURCE_EXHAUSTED
   // Depth, elements, links, joints, name and attribute lengths of a URDF, checked before

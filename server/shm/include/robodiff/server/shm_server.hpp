@@ -2,17 +2,20 @@
 // The iceoryx transport's server: requests arrive as shared-memory chunks (shm_codec.hpp)
 // on the iceoryx service ("robodiff", service, "rpc"); replies go back the same way.
 //
-// One receive thread waits on a WaitSet. Per request: validate the chunk, admit(), then
-//  - Evaluate / EvaluateBatch inline on the receive thread: shape() -> size check ->
-//    loan a response of the exact size -> evaluate() reading the request chunk and
-//    writing the response chunk (no copy of the doubles) -> send;
-//  - the other methods decoded and handed to service.post() (false: RESOURCE_EXHAUSTED at
-//    once); the task encodes and sends the reply from a request thread.
+// One receive thread waits on a WaitSet, drains iceoryx's request queue into one lane
+// per client port (fair_scheduler.hpp) and serves one request per client in turn:
+//  - a request that does not parse costs its take and release: at most
+//    error_replies_per_second error replies per client (the rest are dropped unanswered)
+//    and one log line per client per second (error_budget.hpp);
+//  - admit(); a client with fair.max_queued requests pending is refused RESOURCE_EXHAUSTED;
+//  - the body is copied and the chunk released at once (iceoryx lets a server hold only 4
+//    request chunks), so the receive thread can always take the next request;
+//  - Evaluate on the receive thread: shape() -> size check -> loan a response of the exact
+//    size -> evaluate() writing the response chunk -> send;
+//  - the other methods (EvaluateBatch too) on the service's request threads through
+//    post(), at most fair.max_running per client at once (the client's next ones wait in
+//    its turn); a full service queue is RESOURCE_EXHAUSTED.
 // The port is not thread-safe, so every loan / send / take / release holds one mutex.
-//
-// iceoryx lets a server hold only 4 request chunks at once, so a posted request's chunk
-// is released as soon as it is decoded (its routing header is kept): long requests (a
-// GetFunction waiting for a build) never stall Evaluate.
 
 #include <chrono>
 #include <cstdint>
@@ -20,6 +23,7 @@
 #include <string>
 
 #include "robodiff/schema/shm_mempools.hpp"
+#include "robodiff/server/fair_scheduler.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
 #include "robodiff/server/shm_roudi.hpp"  // ensureRoudi(): a RouDi for the server, before start()
@@ -39,6 +43,11 @@ struct ShmServerOptions {
   // crashed robodiffd RouDi has not removed yet: it takes ~1.5 s), wait this long for it
   // to go before refusing with ALREADY_EXISTS.
   std::chrono::milliseconds previous_server_wait{4000};
+  // Per client port: requests pending and posted requests running at once (limits.*).
+  FairLimits fair;
+  // Error replies per client per second to malformed or over-quota requests; the rest
+  // are dropped unanswered.
+  std::uint32_t error_replies_per_second = 100;
 };
 
 class ShmServer {
@@ -58,7 +67,8 @@ class ShmServer {
   // Stops the receive thread, waits for in-flight requests, stops offering. Idempotent.
   void stop();
 
-  // Requests taken and not yet answered (an Evaluate on the receive thread, posted tasks).
+  // Requests taken and not yet answered (in a client's lane, an Evaluate on the receive
+  // thread, posted tasks).
   std::size_t inFlight() const;
   bool running() const;
 
