@@ -2,9 +2,19 @@
 
 #include <regex>
 
+#include "robodiff/language/bounded_text.hpp"
+
 namespace robodiff::language {
 
-std::string jsonProblem(const std::string& parser_message) {
+// libstdc++'s std::regex recurses once per character matched: a message quoting a 200 KB
+// unterminated string (nlohmann's "last read: '...'") overflowed the stack of robodiffd's
+// GetFunction (found by tests/fuzz/spec_fuzz.cpp). Messages are cut first, like any
+// client-sent text quoted in a message.
+constexpr std::size_t kMaxMessageBytes = 1024;
+
+std::string jsonProblem(const std::string& full_message) {
+  const std::string parser_message =
+      full_message.size() > kMaxMessageBytes ? boundedText(full_message, kMaxMessageBytes) : full_message;
   // [json.exception.parse_error.101] parse error at line 3, column 1: syntax error while
   // parsing array - unexpected end of input; expected ']'
   static const std::regex parse_error(
