@@ -1,5 +1,6 @@
 #include "user_evaluator.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "robodiff/language/parser.hpp"
@@ -69,6 +70,8 @@ Evaluator<S>::Evaluator(const PrimitiveContext& context, std::map<std::string, V
 template <class S> Value<S> Evaluator<S>::located(const Expr& e, const std::string& path, const std::string& text) {
   try {
     return eval(e);
+  } catch (const EvalTooLarge& error) {
+    throw SpecTooLarge(path + ": column " + std::to_string(error.column()) + ": " + error.what() + language::caretLine(text, error.column()));
   } catch (const EvalError& error) {
     throw SpecError(path + ": column " + std::to_string(error.column()) + ": " + error.what() + language::caretLine(text, error.column()));
   }
@@ -104,7 +107,20 @@ template <class S> Value<S> Evaluator<S>::coordinates(const Value<S>& v) {
   return out;
 }
 
+template <class S> void Evaluator<S>::charge(std::uint64_t entries, int column) {
+  work_ += entries;
+  if (work_ > kMaxEvaluatedEntries)
+    throw EvalTooLarge(column, "the expressions compute more than " + std::to_string(kMaxEvaluatedEntries) +
+                                   " entries (values and derivatives, in all), the limit on a user function's work");
+}
+
 template <class S> Value<S> Evaluator<S>::eval(const Expr& e) {
+  Value<S> v = evalNode(e);
+  charge(static_cast<std::uint64_t>(v.m.size()) + static_cast<std::uint64_t>(v.d.size()), e.column);
+  return v;
+}
+
+template <class S> Value<S> Evaluator<S>::evalNode(const Expr& e) {
   switch (e.kind) {
     case ExprKind::Number: {
       Value<S> v;
@@ -157,6 +173,8 @@ template <class S> Value<S> Evaluator<S>::call(const Expr& e) {
     const int rows = constantInteger(*e.args[0], context_.model, e.text + "()'s size");
     const int cols = e.args.size() > 1 ? constantInteger(*e.args[1], context_.model, "zeros()'s size") : e.text == "eye" ? rows : 1;
     if (rows < 1 || cols < 1 || rows > 10000 || cols > 10000) throw EvalError(column, e.text + "(): sizes between 1 and 10000");
+    if (work_ + static_cast<std::uint64_t>(rows) * static_cast<std::uint64_t>(cols) > kMaxEvaluatedEntries)
+      charge(static_cast<std::uint64_t>(rows) * static_cast<std::uint64_t>(cols), column);  // throws, before allocating
     Value<S> v;
     v.m = e.text == "eye" ? MatX<S>(MatX<S>::Identity(rows, cols)) : MatX<S>(MatX<S>::Zero(rows, cols));
     return v;
@@ -190,7 +208,13 @@ template <class S> Value<S> Evaluator<S>::binary(const Expr& e) {
   const std::string& op = e.text;
   const std::string what = "'" + op + "'";
   using P = std::pair<S, S>;
-  if (op == "@") return matrixProduct(a, b, e.column);
+  if (op == "@") {  // its multiply-adds (with the tangents') are charged before they run
+    const auto tangents = static_cast<std::uint64_t>(std::max(a.d.cols(), b.d.cols()));
+    if (a.cols() == b.rows())
+      charge(static_cast<std::uint64_t>(a.rows()) * static_cast<std::uint64_t>(a.cols()) *
+                 static_cast<std::uint64_t>(b.cols()) * (1 + tangents), e.column);
+    return matrixProduct(a, b, e.column);
+  }
   if (op == "+" || op == "-") {
     const double sign = op == "+" ? 1.0 : -1.0;
     return zipEntries<S>(a, b, what.c_str(), e.column, [sign](const S& x, const S& y) { return S(sign > 0 ? x + y : x - y); },

@@ -5,6 +5,7 @@
 // with a caret under the column.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <set>
 #include <string>
@@ -21,6 +22,11 @@ int constantInteger(const language::Expr& e, const Model& model, const std::stri
 // fixed numbers' count. Throws SpecError naming the input.
 std::map<std::string, int> inputSizes(const Model& model, const UserFunction& f);
 
+// The most entries one evaluation may compute: every value and tangent an expression
+// node produces, in all, and a matrix product's multiply-adds before it runs. Real specs
+// stay below 1% of it; `eye(10000) @ eye(10000)` would otherwise take hours and GBs.
+inline constexpr std::uint64_t kMaxEvaluatedEntries = 20'000'000;
+
 template <class S> class Evaluator {
  public:
   Evaluator(const PrimitiveContext& context, std::map<std::string, Value<S>> inputs);
@@ -32,6 +38,9 @@ template <class S> class Evaluator {
 
  private:
   Value<S> eval(const language::Expr& e);
+  Value<S> evalNode(const language::Expr& e);
+  // Adds `entries` to the work done; EvalTooLarge past kMaxEvaluatedEntries.
+  void charge(std::uint64_t entries, int column);
   Value<S> name(const language::Expr& e);
   Value<S> call(const language::Expr& e);
   Value<S> binary(const language::Expr& e);
@@ -44,6 +53,7 @@ template <class S> class Evaluator {
   std::map<std::string, Value<S>> inputs_;
   std::map<std::string, Value<S>> defines_;  // evaluated so far
   std::set<std::string> evaluating_;         // defines being evaluated (cycles)
+  std::uint64_t work_ = 0;                   // entries computed so far (charge)
 };
 
 }  // namespace robodiff::detail

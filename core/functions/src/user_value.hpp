@@ -51,6 +51,13 @@ class EvalError : public std::runtime_error {
   int column_;
 };
 
+// Past the limit on what the expressions compute (Evaluator's budget): a resource error,
+// SpecTooLarge (RESOURCE_EXHAUSTED) once located.
+class EvalTooLarge : public EvalError {
+ public:
+  using EvalError::EvalError;
+};
+
 inline bool isZero(const symbolic::Sym& x) { return x.isConstant() && x.constantValue() == 0.0; }
 inline bool isZero(double) { return false; }
 
