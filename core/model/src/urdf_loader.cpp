@@ -15,6 +15,8 @@
 
 #include "mass_matrix_check.hpp"
 #include "urdf_validation.hpp"
+#include "utf8_check.hpp"
+#include "xacro_check.hpp"
 
 namespace robodiff {
 namespace {
@@ -196,6 +198,8 @@ std::string normaliseWhitespace(std::string xml) {
 Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& source_name,
                      const UrdfLimits& limits, PhysicsCheck physics) {
   checkUrdfLimits(xml, limits, source_name);  // before the parsers, which recurse per level
+  detail::checkUtf8(xml, source_name);         // before TinyXML, which reads past a cut sequence
+  detail::refuseXacro(xml, source_name);       // a clear word instead of "no <link>"
   const bool dynamic = physics == PhysicsCheck::Dynamic;
   detail::validateUrdfXml(xml, source_name, dynamic);
   urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(normaliseWhitespace(xml), source_name);
