@@ -222,8 +222,8 @@ bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& functio
     if (!artifact) return false;
     std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
     cache_hits_.fetch_add(1, std::memory_order_relaxed);
-    f.setCompileStage(CompileStage::Compiled);
     f.setCompileSeconds(secondsSince(started), true);
+    f.setCompileStage(CompileStage::Compiled);
     f.ready(std::move(compiled));
     log_.info("function_loaded",
               {{"function_id", f.id()}, {"function", f.functionName()}, {"key", key}, {"source", "cache"}});
@@ -287,9 +287,10 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
       const std::string difference = compiled->layout().differenceFrom(current->layout());
       if (!difference.empty()) throw std::runtime_error("its blocks differ from the traced function's: " + difference);
     }
+    // The times first: whoever sees the compiled phase must see them too.
+    f.setCompileSeconds(status.seconds, status.state == workers::BuildState::Cached);
     f.swap(std::move(compiled));
     f.setCompileStage(CompileStage::Compiled);
-    f.setCompileSeconds(status.seconds, status.state == workers::BuildState::Cached);
   } catch (const std::exception& e) {
     buildFailed(function, std::string("the built library cannot be used: ") + e.what());
     return;
