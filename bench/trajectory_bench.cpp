@@ -27,6 +27,7 @@
 
 #include <unistd.h>
 
+#include "output/human_units.hpp"
 #include "robodiff/batch/batch_function.hpp"
 #include "robodiff/batch/trajectory_evaluation.hpp"
 #include "robodiff/batch/trajectory_table.hpp"
@@ -140,16 +141,6 @@ Row benchRobot(const fs::path& urdf_path, const std::string& label, std::uint64_
   return row;
 }
 
-std::string grouped(double x) {
-  const std::string digits = std::to_string(static_cast<std::uint64_t>(x + 0.5));
-  std::string out;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
-    out += digits[i];
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -192,15 +183,15 @@ int main(int argc, char** argv) {
 
   std::printf("Trajectory evaluation: RNEA + Jacobian d tau / d[q, v, a] (compiled -O2 -march=native), %s knots, "
               "%u hardware threads, best of %d runs, knots/s\n\n",
-              grouped(static_cast<double>(knots)).c_str(), std::thread::hardware_concurrency(), kRuns);
+              cli::formatGrouped(static_cast<double>(knots)).c_str(), std::thread::hardware_concurrency(), kRuns);
   std::printf("| robot | nv | doubles out/knot | (a) evaluateMany, all cores | (b) evaluateMany, 1 thread | "
               "(c) evaluate() per knot | (a)/(c) | (b)/(c) | (d) CSV in -> .rdb out | (e) CSV in -> CSV out | "
               "max rel. diff |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const Row& r : rows)
     std::printf("| %s | %d | %zu | %s | %s | %s | %.1fx | %.2fx | %s | %s | %.1e |\n", r.robot.c_str(), r.nv,
-                r.outputs, grouped(r.all).c_str(), grouped(r.one_thread).c_str(), grouped(r.loop).c_str(),
-                r.all / r.loop, r.one_thread / r.loop, grouped(r.job_binary).c_str(), grouped(r.job_csv).c_str(),
+                r.outputs, cli::formatGrouped(r.all).c_str(), cli::formatGrouped(r.one_thread).c_str(), cli::formatGrouped(r.loop).c_str(),
+                r.all / r.loop, r.one_thread / r.loop, cli::formatGrouped(r.job_binary).c_str(), cli::formatGrouped(r.job_csv).c_str(),
                 r.worst_difference);
   return 0;
 }

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "bench_timing.hpp"
+#include "commands/bench_timing.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/functions/function_library.hpp"
 #include "robodiff/functions/reference.hpp"

@@ -4,8 +4,8 @@
 #include <iostream>
 #include <string>
 
-#include "commands.hpp"
-#include "service_connection.hpp"
+#include "commands/commands.hpp"
+#include "service/service_connection.hpp"
 
 namespace robodiff::cli {
 
