@@ -9,25 +9,12 @@
 
 #include <gtest/gtest.h>
 
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
-#include "dds_test_env.hpp"
-#include "fake_service.hpp"
-#include "robodiff/client/dds_connection.hpp"
-#include "robodiff/client/dds_keystore.hpp"
+#include "dds_secure_env.hpp"
 #include "robodiff/schema/dds_codec.hpp"
 #include "robodiff/schema/dds_partitions.hpp"
-#include "robodiff/server/dds_server.hpp"
-#include "support/temp_dir.hpp"
-
-extern char** environ;
 
 namespace robodiff {
 namespace {
@@ -38,102 +25,19 @@ using client::DdsConnectionOptions;
 using client::IdentityRole;
 using dds_codec::DdsEndpoints;
 using dds_codec::DdsSecurity;
+using testing::DdsChild;
 namespace fs = std::filesystem;
 
-// LoadModel answers with who called: "<name>[+operator][+authenticated]".
-class CallerEchoService : public testing::FakeService {
- public:
-  using FakeService::FakeService;
-  Status loadModel(const server::CallContext& ctx, const rpc::LoadModelRequest&, rpc::LoadModelReply& reply) override {
-    reply.model_id = ctx.caller.name + (ctx.caller.operator_ ? "+operator" : "") +
-                     (ctx.caller.authenticated ? "+authenticated" : "");
-    return {};
-  }
-};
-
-constexpr const char* kChildVariable = "ROBODIFF_DDS_CALLER_CHILD";  // "<domain> <keystore>/<identity> | open"
-
-// In a child: a caller-echo server until killed (Cyclone sets security up per domain and
-// process, so the server's identity needs a process of its own).
-int runServerIfAsked() {
-  const char* spec = std::getenv(kChildVariable);
-  if (!spec) return 0;
-  std::istringstream words(spec);
-  std::uint32_t domain = 0;
-  std::string identity;
-  words >> domain >> identity;
-  try {
-    CallerEchoService service("srv-caller");
-    server::Logger log(stderr, server::LogLevel::Warn);
-    server::DdsServerOptions options;
-    options.domain_id = domain;
-    if (identity != "open") options.security = dds_codec::securityFromSpec(identity);
-    server::DdsServer server(service, options, log);
-    server.start();
-    std::this_thread::sleep_for(60s);  // the parent kills it long before
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "caller test server: %s\n", e.what());
-    _exit(4);
-  }
-  _exit(0);
-}
-const int server_ran = runServerIfAsked();
-
-// This test binary again as the server (fork + exec: a clean DDS runtime); killed on scope exit.
-class ServerChild {
- public:
-  ServerChild(std::uint32_t domain, const std::string& identity) {
-    std::vector<std::string> env;
-    for (char** e = environ; *e; ++e) env.emplace_back(*e);
-    env.push_back(std::string(kChildVariable) + "=" + std::to_string(domain) + " " + identity);
-    std::vector<char*> envp;
-    for (auto& e : env) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    std::string self = "/proc/self/exe", filter = "--gtest_filter=-*";
-    char* argv[] = {self.data(), filter.data(), nullptr};
-    pid_ = fork();
-    if (pid_ == 0) {
-      execve(self.c_str(), argv, envp.data());
-      _exit(127);
-    }
-  }
-  ~ServerChild() {
-    kill(pid_, SIGKILL);
-    waitpid(pid_, nullptr, 0);
-  }
-
- private:
-  pid_t pid_ = 0;
-};
-
-// One keystore for the suite: alice, bob (clients) and ops (an operator).
-struct Keystore {
-  testing::TempDir dir;
-  fs::path path = dir / "keystore";
-  Keystore() {
-    client::initKeystore(path);
-    client::addIdentity(path, "alice", IdentityRole::Client);
-    client::addIdentity(path, "ops", IdentityRole::Operator);
-  }
-  fs::path identity(const char* name) const { return path / name; }
-};
 
 class DdsCallerTest : public testing::DdsTest {
  protected:
   static void SetUpTestSuite() {
-    (void)server_ran;
     testing::DdsTest::SetUpTestSuite();
-    keys_ = new Keystore();
+    keys_ = new testing::TestKeystore({{"alice", IdentityRole::Client}, {"ops", IdentityRole::Operator}});
   }
   static void TearDownTestSuite() {
     delete keys_;
     keys_ = nullptr;
-  }
-  // A domain per test (this process's participants of one domain share one security setup),
-  // apart from the other suites' domains of this binary.
-  static std::uint32_t freshDomain() {
-    static int next = 0;
-    return static_cast<std::uint32_t>(1 + (getpid() + 100 + 37 * ++next) % 200);
   }
   DdsConnectionOptions options(const DdsSecurity& security, std::chrono::milliseconds timeout) const {
     DdsConnectionOptions o;
@@ -187,8 +91,8 @@ class DdsCallerTest : public testing::DdsTest {
     return "no reply";
   }
 
-  static inline Keystore* keys_ = nullptr;
-  const std::uint32_t domain_ = freshDomain();
+  static inline testing::TestKeystore* keys_ = nullptr;
+  const std::uint32_t domain_ = testing::freshSecureDomain(100);
 };
 
 TEST_F(DdsCallerTest, KeystoreGrantsEachIdentityItsOwnPartition) {
@@ -206,32 +110,37 @@ TEST_F(DdsCallerTest, KeystoreGrantsEachIdentityItsOwnPartition) {
 }
 
 TEST_F(DdsCallerTest, ServerReadsTheAuthenticatedIdentityFromTheWildcardPartition) {
-  ServerChild server(domain_, keys_->identity("robodiffd").string());
+  DdsChild server("server", domain_, keys_->spec("robodiffd"));
   DdsConnection alice(options(dds_codec::keystoreIdentity(keys_->path, "alice"), 15s));
   EXPECT_EQ(whoCalls(alice), "dds:alice+authenticated");
 }
 
 TEST_F(DdsCallerTest, OperatorIdentityIsAnOperator) {
-  ServerChild server(domain_, keys_->identity("robodiffd").string());
+  DdsChild server("server", domain_, keys_->spec("robodiffd"));
   DdsConnection ops(options(dds_codec::keystoreIdentity(keys_->path, "ops"), 15s));
   EXPECT_EQ(whoCalls(ops), "dds:ops+operator+authenticated");
 }
 
 TEST_F(DdsCallerTest, WriterInAnotherCallersPartitionIsNotCreated) {
-  const DdsSecurity alice = dds_codec::keystoreIdentity(keys_->path, "alice");
-  for (const char* forged : {"robodiff.caller.bob", "robodiff.operator.alice", "robodiff.caller.*"}) {
-    try {
-      DdsEndpoints endpoints(domain_, dds_codec::kDefaultServiceName, DdsEndpoints::Side::Client, 1s, 0ms, alice,
-                             forged);
-      ADD_FAILURE() << "alice created a request writer in " << forged;
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(std::string("in partition ") + forged), std::string::npos) << e.what();
-    }
+  const DdsSecurity alice = keys_->security("alice");
+  DdsEndpoints endpoints(domain_, dds_codec::kDefaultServiceName, DdsEndpoints::Side::Client, 1s, 0ms, alice);
+  ASSERT_GT(testing::rawEndpoint(endpoints, false, {"robodiff.caller.alice"}), 0);  // her own: granted
+  for (const char* forged : {"robodiff.caller.bob", "robodiff.operator.alice", "robodiff.caller.*"})
+    EXPECT_LT(testing::rawEndpoint(endpoints, false, {forged}), 0) << "alice created a request writer in " << forged;
+  EXPECT_LT(testing::rawEndpoint(endpoints, false, {}), 0) << "alice created a request writer in no partition";
+  EXPECT_LT(testing::rawEndpoint(endpoints, false, {"robodiff.caller.alice", "robodiff.caller.bob"}), 0);
+  // The transport's own endpoints in a forged partition fail naming it.
+  try {
+    DdsEndpoints forged(domain_, dds_codec::kDefaultServiceName, DdsEndpoints::Side::Client, 1s, 0ms, alice,
+                        "robodiff.caller.bob");
+    ADD_FAILURE() << "alice made endpoints in robodiff.caller.bob";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("in partition robodiff.caller.bob"), std::string::npos) << e.what();
   }
 }
 
 TEST_F(DdsCallerTest, MovingAWriterToAnotherPartitionIsNotBelieved) {
-  ServerChild server(domain_, keys_->identity("robodiffd").string());
+  DdsChild server("server", domain_, keys_->spec("robodiffd"));
   const DdsSecurity alice = dds_codec::keystoreIdentity(keys_->path, "alice");
   DdsEndpoints endpoints(domain_, dds_codec::kDefaultServiceName, DdsEndpoints::Side::Client, 1s, 0ms, alice);
   ASSERT_TRUE(writerMatched(endpoints, 15s));
@@ -258,7 +167,7 @@ TEST_F(DdsCallerTest, MovingAWriterToAnotherPartitionIsNotBelieved) {
 }
 
 TEST_F(DdsCallerTest, OpenDdsCallerIsTheClaimedUserAndNeverAnOperator) {
-  ServerChild server(domain_, "open");
+  DdsChild server("server", domain_, "open");
   const std::string user = dds_codec::openCallerPartition().substr(dds_codec::kCallerPartitionPrefix.size());
   DdsConnection client(options({}, 15s));
   EXPECT_EQ(whoCalls(client), "user:" + user);

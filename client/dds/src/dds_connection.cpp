@@ -103,7 +103,7 @@ void DdsConnection::takeReplies() {
     for (dds_return_t i = 0; i < n; ++i) {
       if (!infos[i].valid_data) continue;
       const auto& reply = *static_cast<const robodiff_wire_Reply*>(samples[i]);
-      // Every client reads every reply on the topic: keep ours.
+      // Every client of our caller partition reads its replies: keep ours.
       if (reply.header.client_id && client_id_ == reply.header.client_id) pending_->deliver(reply);
     }
     dds_return_loan(endpoints_->reader(), samples, n);

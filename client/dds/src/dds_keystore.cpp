@@ -150,16 +150,17 @@ std::string topicRule(const char* action, const std::string& topic, const std::v
   return rule + "</" + action + ">";
 }
 
-// A client publishes requests only in its own caller partition (the server reads the
-// partition as the caller's identity: dds_partitions.hpp); the server reads all of them.
+// A client publishes requests and reads replies only in its own caller partition (the
+// server reads the partition as the caller's identity and answers there:
+// dds_partitions.hpp); the server reads requests and writes replies in all of them.
 std::string permissionsXml(std::string_view name, IdentityRole role, const KeystoreOptions& options) {
   const std::string request = options.service_name + "_request", reply = options.service_name + "_reply";
+  const std::vector<std::string> partitions =
+      role == IdentityRole::Server ? dds_codec::serverRequestPartitions()
+                                   : std::vector{dds_codec::callerPartition(name, role == IdentityRole::Operator)};
   const bool server = role == IdentityRole::Server;
-  const std::string rules =
-      server ? topicRule("publish", reply, {}) + "\n        " +
-                   topicRule("subscribe", request, dds_codec::serverRequestPartitions())
-             : topicRule("publish", request, {dds_codec::callerPartition(name, role == IdentityRole::Operator)}) +
-                   "\n        " + topicRule("subscribe", reply, {});
+  const std::string rules = topicRule("publish", server ? reply : request, partitions) + "\n        " +
+                            topicRule("subscribe", server ? request : reply, partitions);
   std::ostringstream xml;
   xml << R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"

@@ -65,8 +65,10 @@ std::string openCallerPartition() {
 std::optional<PartitionCaller> callerOfPartition(std::string_view partition) {
   for (const bool operator_ : {false, true}) {
     const std::string_view prefix = operator_ ? kOperatorPartitionPrefix : kCallerPartitionPrefix;
-    if (partition.size() > prefix.size() && partition.substr(0, prefix.size()) == prefix)
-      return PartitionCaller{std::string(partition.substr(prefix.size())), operator_};
+    if (partition.size() <= prefix.size() || partition.substr(0, prefix.size()) != prefix) continue;
+    const std::string_view name = partition.substr(prefix.size());
+    if (name.find_first_of("*?[]\\") != std::string_view::npos) return std::nullopt;  // a pattern, not a name
+    return PartitionCaller{std::string(name), operator_};
   }
   return std::nullopt;
 }

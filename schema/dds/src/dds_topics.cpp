@@ -69,41 +69,55 @@ DdsEndpoints::DdsEndpoints(std::uint32_t domain_id, std::string_view service, Si
   domain_id_ = dds_get_domainid(participant_, &actual) == DDS_RETCODE_OK ? actual : domain_id;
 
   const std::string request_topic = requestTopicName(service), reply_topic = replyTopicName(service);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(writer_blocking.count()));
-  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+  qos_ = dds_create_qos();
+  dds_qset_reliability(qos_, DDS_RELIABILITY_RELIABLE, DDS_MSECS(writer_blocking.count()));
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_ALL, 0);
   std::string failure;
-  const dds_entity_t requests = dds_create_topic(participant_, &robodiff_wire_Request_desc, request_topic.c_str(), qos, nullptr);
-  const dds_entity_t replies = dds_create_topic(participant_, &robodiff_wire_Reply_desc, reply_topic.c_str(), qos, nullptr);
+  const dds_entity_t requests = dds_create_topic(participant_, &robodiff_wire_Request_desc, request_topic.c_str(), qos_, nullptr);
+  reply_topic_entity_ = dds_create_topic(participant_, &robodiff_wire_Reply_desc, reply_topic.c_str(), qos_, nullptr);
   if (requests < 0) {
     failure = ddsError("dds_create_topic", requests) + " for topic " + request_topic;
-  } else if (replies < 0) {
-    failure = ddsError("dds_create_topic", replies) + " for topic " + reply_topic;
+  } else if (reply_topic_entity_ < 0) {
+    failure = ddsError("dds_create_topic", reply_topic_entity_) + " for topic " + reply_topic;
   } else {
     const bool server = side == Side::Server;
     reader_topic_ = server ? request_topic : reply_topic;
     writer_topic_ = server ? reply_topic : request_topic;
-    dds_qos_t* request_qos = dds_create_qos();
-    dds_copy_qos(request_qos, qos);
-    setPartitions(request_qos, request_partitions_);
-    reader_ = dds_create_reader(participant_, server ? requests : replies, server ? request_qos : qos, nullptr);
-    writer_ = dds_create_writer(participant_, server ? replies : requests, server ? qos : request_qos, nullptr);
-    dds_delete_qos(request_qos);
+    // Requests and a client's replies travel in partitions; a server makes its reply
+    // writers, one per caller partition, with createReplyWriter().
+    dds_qos_t* partitioned = dds_create_qos();
+    dds_copy_qos(partitioned, qos_);
+    setPartitions(partitioned, request_partitions_);
+    reader_ = dds_create_reader(participant_, server ? requests : reply_topic_entity_, partitioned, nullptr);
+    if (!server) writer_ = dds_create_writer(participant_, requests, partitioned, nullptr);
+    dds_delete_qos(partitioned);
     if (reader_ < 0) failure = ddsError("dds_create_reader", reader_) + " for topic " + reader_topic_;
     else if (writer_ < 0) failure = ddsError("dds_create_writer", writer_) + " for topic " + writer_topic_;
-    if ((server ? reader_ : writer_) < 0 && security.enabled())
+    if (!failure.empty() && security.enabled())
       failure += " in partition " + request_partitions_.front() + " (does " + security.describe() +
-                 " grant it? `robodiff security` writes the grants)";
+                 " grant it? `robodiff security` writes the grants; identities made before replies had "
+                 "partitions must be made again)";
   }
-  dds_delete_qos(qos);
   if (!failure.empty()) {
+    dds_delete_qos(qos_);
+    qos_ = nullptr;
     dds_delete(participant_);
     throw std::runtime_error(failure + " on " + where);
   }
 }
 
+dds_entity_t DdsEndpoints::createReplyWriter(const std::string& partition) const {
+  dds_qos_t* qos = dds_create_qos();
+  dds_copy_qos(qos, qos_);
+  setPartitions(qos, {partition});
+  const dds_entity_t writer = dds_create_writer(participant_, reply_topic_entity_, qos, nullptr);
+  dds_delete_qos(qos);
+  return writer;
+}
+
 DdsEndpoints::~DdsEndpoints() {
   if (participant_ > 0) dds_delete(participant_);
+  if (qos_) dds_delete_qos(qos_);
 }
 
 }  // namespace robodiff::dds_codec

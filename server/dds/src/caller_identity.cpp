@@ -9,8 +9,6 @@ namespace robodiff::server::dds_detail {
 
 namespace {
 
-constexpr std::size_t kMaxKnownPublications = 4096;  // then the cache starts afresh
-
 // Never a caller a partition can name (no partition-derived name has a '?').
 Caller unknownCaller() { return Caller{"dds:?unknown", false, false}; }
 
@@ -36,20 +34,28 @@ Caller DdsCallers::of(dds_instance_handle_t publication) {
   return caller;
 }
 
-Caller DdsCallers::lookUp(dds_instance_handle_t publication) const {
-  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader_, publication);
-  if (endpoint == nullptr) return unknownCaller();
-  Caller caller = unknownCaller();
+std::optional<std::vector<std::string>> publicationPartitions(dds_entity_t reader, dds_instance_handle_t publication) {
+  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, publication);
+  if (endpoint == nullptr) return std::nullopt;
+  std::vector<std::string> partitions;
   uint32_t count = 0;
   char** names = nullptr;
   if (endpoint->qos && dds_qget_partition(endpoint->qos, &count, &names)) {
-    // One partition per client writer; a writer in several is no caller of ours.
-    if (count == 1) caller = callerOfRequestPartition(names[0], secure_);
-    for (uint32_t i = 0; i < count; ++i) dds_free(names[i]);
+    for (uint32_t i = 0; i < count; ++i) {
+      partitions.emplace_back(names[i]);
+      dds_free(names[i]);
+    }
     dds_free(names);
   }
   dds_builtintopic_free_endpoint(endpoint);
-  return caller;
+  return partitions;
+}
+
+Caller DdsCallers::lookUp(dds_instance_handle_t publication) const {
+  const auto partitions = publicationPartitions(reader_, publication);
+  // One partition per client writer; a writer in several is no caller of ours.
+  if (!partitions || partitions->size() != 1) return unknownCaller();
+  return callerOfRequestPartition(partitions->front(), secure_);
 }
 
 }  // namespace robodiff::server::dds_detail

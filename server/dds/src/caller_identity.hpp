@@ -8,13 +8,25 @@
 
 #include <dds/dds.h>
 
+#include <cstddef>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::server::dds_detail {
+
+// The most request publications (clients) robodiffd keeps track of: callers cached, and
+// reply writers (one per caller partition: reply_channels.hpp).
+inline constexpr std::size_t kMaxKnownPublications = 4096;
+
+// The partitions of `publication` as the reader matched it; nullopt when it is not (or no
+// longer) matched.
+std::optional<std::vector<std::string>> publicationPartitions(dds_entity_t reader, dds_instance_handle_t publication);
 
 // The Caller a request partition names: secure ("dds:<name>", operator when the partition
 // says so) or open ("user:<name>"); an unknown caller, owner of nothing, for any other.

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "caller_identity.hpp"
+#include "reply_channels.hpp"
 #include "reply_writer.hpp"
 #include "robodiff/schema/dds_codec.hpp"
 #include "robodiff/server/error_budget.hpp"
@@ -23,7 +24,8 @@ using dds_detail::RequestInfo;
 struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
   Core(ServiceApi& s, DdsServerOptions o, Logger& l)
       : service(s), options(std::move(o)), log(l), replies(s, l, options.max_sample_bytes), scheduler(options.fair),
-        refused(options.error_replies_per_second), malformed(options.error_replies_per_second) {}
+        refused(options.error_replies_per_second), malformed(options.error_replies_per_second),
+        unanswerable(options.error_replies_per_second) {}
 
   ServiceApi& service;
   DdsServerOptions options;
@@ -32,6 +34,7 @@ struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
 
   std::unique_ptr<dds_codec::DdsEndpoints> endpoints;
   std::unique_ptr<dds_detail::DdsCallers> callers;  // who sent a request (caller_identity.hpp)
+  std::unique_ptr<dds_detail::ReplyChannels> channels;  // where to answer it (reply_channels.hpp)
   dds_entity_t guard = 0;  // wakes the receive thread on stop()
   std::thread receiver;
   std::atomic<bool> stopping{false};
@@ -49,9 +52,10 @@ struct DdsServer::Core : std::enable_shared_from_this<DdsServer::Core> {
     RequestInfo info;
   };
   FairScheduler<Queued> scheduler;
-  ErrorBudget refused, malformed;
+  ErrorBudget refused, malformed, unanswerable;
 
   void receiveLoop();
+  void refreshChannels();
   bool drain(dds_entity_t reader);
   void serve(Queued queued);
   void postFair(Queued queued);
@@ -107,7 +111,12 @@ void DdsServer::start() {
     throw std::runtime_error(dds_codec::ddsError("dds_create_guardcondition", c.guard));
   }
   c.callers = std::make_unique<dds_detail::DdsCallers>(c.endpoints->reader(), c.options.security.enabled());
-  c.replies.setWriter(c.endpoints->writer());
+  c.channels = std::make_unique<dds_detail::ReplyChannels>(
+      c.endpoints->reader(),
+      [endpoints = c.endpoints.get()](const std::string& partition) { return endpoints->createReplyWriter(partition); },
+      dds_detail::kMaxKnownPublications);
+  // The receive thread hears of request publications (dis)appearing: reply channels follow.
+  dds_set_status_mask(c.endpoints->reader(), DDS_SUBSCRIPTION_MATCHED_STATUS);
   c.receiver = std::thread([core = core_] { core->receiveLoop(); });
   c.log.info("dds_server_started", {{"domain", c.endpoints->domainId()},
                                     {"request_topic", c.endpoints->readerTopic()},
@@ -130,7 +139,8 @@ void DdsServer::stop() {
   if (c.stopping.exchange(true) || !c.endpoints) return;
   dds_set_guardcondition(c.guard, true);
   if (c.receiver.joinable()) c.receiver.join();
-  c.replies.setWriter(0);  // posted tasks still running drop their replies
+  c.replies.close();  // posted tasks still running drop their replies
+  if (c.channels) c.channels->close();
   const auto domain = c.endpoints->domainId();
   c.endpoints.reset();     // deletes the participant: clients see this server go away
   c.log.info("dds_server_stopped", {{"domain", domain}, {"in_flight", c.in_flight.load()}});
@@ -162,8 +172,13 @@ void DdsServer::Core::receiveLoop() {
   const dds_entity_t readable = dds_create_readcondition(reader, DDS_ANY_STATE);
   dds_waitset_attach(waitset, readable, 0);
   dds_waitset_attach(waitset, guard, 0);
+  dds_waitset_attach(waitset, reader, 0);  // subscription matched: a client came or went
+  refreshChannels();
   while (!stopping) {
     dds_waitset_wait(waitset, nullptr, 0, DDS_INFINITY);
+    uint32_t matched = 0;
+    if (dds_take_status(reader, &matched, DDS_SUBSCRIPTION_MATCHED_STATUS) == DDS_RETCODE_OK && matched != 0)
+      refreshChannels();
     // Take what the reader holds into the lanes, serve the next writer's request, repeat.
     while (!stopping) {
       drain(reader);
@@ -174,6 +189,15 @@ void DdsServer::Core::receiveLoop() {
   }
   dds_delete(readable);
   dds_delete(waitset);
+}
+
+// Reply channels follow the matched request publications; a caller partition refused one is
+// logged once; the dropped ones are deleted on a request thread (a writer's deletion may
+// wait for acknowledgements), here if the service's queue is full.
+void DdsServer::Core::refreshChannels() {
+  auto refreshed = channels->refresh();
+  for (const std::string& problem : refreshed.problems) log.warn("dds_reply_writer_refused", {{"error", problem}});
+  if (!refreshed.dropped.empty()) service.post([dropped = std::move(refreshed.dropped)] {});
 }
 
 // Takes up to kDrainBatch samples (checked, refused or queued in their writer's lane).
@@ -244,6 +268,17 @@ void DdsServer::Core::handle(std::shared_ptr<WireRequest> sample, Clock::time_po
   info.received = received;
   // Addressed to another server: it answers (several servers may share a domain).
   if (!info.header.server_instance_id.empty() && info.header.server_instance_id != service.instanceId()) return;
+  // The reply goes to the caller partition of the request's publication; without one the
+  // request cannot be answered, so it is not served (logged within the error budget).
+  auto found = channels->forPublication(publication);
+  if (!found.channel) {
+    const auto d = unanswerable.note(publication, received);
+    if (d.log)
+      log.warn("dds_request_not_served", {{"client_id", info.header.client_id}, {"count", d.count},
+                                          {"reason", found.problem}});
+    return;
+  }
+  info.channel = std::move(found.channel);
 
   const auto method = dds_codec::methodFromWire(request.body._d);
   if (method) info.method = *method;

@@ -16,15 +16,15 @@ void ReplyWriter::header(const RequestInfo& info, const Status& status, robodiff
 }
 
 bool ReplyWriter::write(const RequestInfo& info, const robodiff_wire_Reply& reply) {
-  const dds_entity_t writer = writer_.load();
-  if (writer <= 0) return false;  // stopped: the client sees the server gone instead
-  const dds_return_t rc = dds_write(writer, &reply);
+  if (!open_.load() || !info.channel) return false;  // stopped: the client sees the server gone instead
+  const dds_return_t rc = dds_write(info.channel->writer, &reply);
   if (rc == DDS_RETCODE_OK) return true;
   // After stop() the writer is deleted under running tasks: expected, not worth a warning.
-  if (writer_.load() > 0)
+  if (open_.load())
     log_.warn("dds_reply_write_failed", {{"method", rpc::toString(info.method)},
                                          {"client_id", info.header.client_id},
                                          {"correlation_id", info.header.correlation_id},
+                                         {"partition", info.channel->partition},
                                          {"error", dds_strretcode(rc)}});
   return false;
 }

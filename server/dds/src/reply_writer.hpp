@@ -1,7 +1,8 @@
 #pragma once
-// Writing replies on the reply topic: the header every reply carries (server version and
-// instance, the request's client and correlation ids, the status), error replies with the
-// method's empty body, and EvaluateBatch replies split into chunks. Each reply is
+// Writing replies on the reply topic, each on its request's channel (the reply writer of the
+// caller's partition: reply_channels.hpp): the header every reply carries (server version
+// and instance, the request's client and correlation ids, the status), error replies with
+// the method's empty body, and EvaluateBatch replies split into chunks. Each reply is
 // accounted once with ServiceApi::recordRequest("dds", ...). Safe from any thread.
 
 #include <dds/dds.h>
@@ -10,6 +11,7 @@
 #include <cstdint>
 #include <span>
 
+#include "reply_channels.hpp"
 #include "robodiff/schema/dds_codec.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
@@ -23,6 +25,7 @@ struct RequestInfo {
   Clock::time_point received;
   std::uint32_t knot_count = 0;  // EvaluateBatch: the request's (total_knots of an error reply)
   dds_instance_handle_t publication = 0;  // the writer that sent it (its partition names the caller)
+  ReplyChannelPtr channel;                // the reply writer in that partition
 };
 
 class ReplyWriter {
@@ -30,7 +33,7 @@ class ReplyWriter {
   ReplyWriter(ServiceApi& service, Logger& log, std::size_t max_sample_bytes)
       : service_(service), log_(log), max_sample_bytes_(max_sample_bytes) {}
 
-  void setWriter(dds_entity_t writer) { writer_.store(writer); }  // 0: replies are dropped
+  void close() { open_.store(false); }  // stopping: replies are dropped from now on
 
   // The reply header of `info` with `status`, into a zeroed C header.
   void header(const RequestInfo& info, const Status& status, robodiff_wire_ReplyHeader& out) const;
@@ -54,7 +57,7 @@ class ReplyWriter {
   ServiceApi& service_;
   Logger& log_;
   std::size_t max_sample_bytes_;
-  std::atomic<dds_entity_t> writer_{0};
+  std::atomic<bool> open_{true};
 };
 
 }  // namespace robodiff::server::dds_detail

@@ -14,10 +14,10 @@
 namespace robodiff::client {
 
 enum class IdentityRole {
-  Client,    // publishes requests (in partition robodiff.caller.<name> only), reads replies
-  Operator,  // a client publishing in robodiff.operator.<name> (may act on others' jobs and
-             // functions); its certificate also says OU=operators
-  Server,    // reads requests, publishes replies
+  Client,    // publishes requests and reads replies, in partition robodiff.caller.<name> only
+  Operator,  // a client in robodiff.operator.<name> (may act on others' jobs and functions);
+             // its certificate also says OU=operators
+  Server,    // reads requests and publishes replies in every caller partition
 };
 
 struct KeystoreOptions {

@@ -1,9 +1,10 @@
 #pragma once
 // Who calls over DDS, through the standard PARTITION QoS (deploy/security.md, "Ownership").
-// A client writes its requests in its caller partition:
+// A client writes its requests in its caller partition, and reads its replies there:
 //   robodiff.caller.<name>     a client identity (`robodiff security add-client <name>`)
 //   robodiff.operator.<name>   an operator identity (`add-client <name> --operator`)
-// and the server reads requests in both wildcard patterns. Under DDS Security an identity's
+// The server reads requests in both wildcard patterns and writes each reply in the
+// partition of its request's publication (one reply writer per caller partition). Under DDS Security an identity's
 // signed permissions allow it to publish requests only in its own partition, and the
 // access-control plugin checks every remote writer's partition against them: the partition
 // the server reads on a request's publication is the caller's proven identity. On open DDS
@@ -22,7 +23,8 @@ inline constexpr std::string_view kOperatorPartitionPrefix = "robodiff.operator.
 
 // "robodiff.caller.alice", or "robodiff.operator.alice" for an operator.
 std::string callerPartition(std::string_view name, bool operator_);
-// The partition patterns a server reads requests in: both prefixes followed by '*'.
+// The partition patterns a server reads requests in, and may write replies in: both
+// prefixes followed by '*'.
 std::vector<std::string> serverRequestPartitions();
 
 // The partition an identity's signed permissions (permissions.p7s, S/MIME with the XML in
@@ -39,7 +41,8 @@ struct PartitionCaller {
   std::string name;  // "alice"
   bool operator_ = false;
 };
-// The caller a request partition names; nullopt for any other partition.
+// The caller a request partition names; nullopt for any other partition (another prefix,
+// an empty name, or a name with a DDS wildcard character '*', '?', '[', ']' or a backslash).
 std::optional<PartitionCaller> callerOfPartition(std::string_view partition);
 
 }  // namespace robodiff::dds_codec

@@ -3,8 +3,9 @@
 // "<service>_request" (robodiff::wire::Request, clients write, servers read) and
 // "<service>_reply" (robodiff::wire::Reply, servers write, clients read). QoS on both:
 // RELIABLE and KEEP_ALL, so that no request or reply is dropped for lack of history.
-// Requests travel in caller partitions (dds_partitions.hpp): a client writes in its own,
-// the server reads in all; replies in the default partition.
+// Requests and replies travel in caller partitions (dds_partitions.hpp): a client writes
+// requests and reads replies in its own; the server reads requests in all of them and
+// answers each in its request's partition (a reply writer per caller partition).
 
 #include <dds/dds.h>
 
@@ -29,8 +30,9 @@ std::string replyTopicName(std::string_view service);    // "<service>_reply"
 // "dds_create_topic failed: Bad Parameter (-3)".
 std::string ddsError(std::string_view call, dds_return_t code);
 
-// A participant with both topics, a reader and a writer: the server reads requests and
-// writes replies, the client the other way round. Deleting the participant deletes the rest.
+// A participant with both topics and a reader: the server reads requests, the client
+// replies. A client also has its request writer; a server makes its reply writers with
+// createReplyWriter(). Deleting the participant deletes the rest.
 class DdsEndpoints {
  public:
   enum class Side { Server, Client };
@@ -51,15 +53,19 @@ class DdsEndpoints {
 
   dds_entity_t participant() const { return participant_; }
   dds_entity_t reader() const { return reader_; }
-  dds_entity_t writer() const { return writer_; }
+  dds_entity_t writer() const { return writer_; }  // a client's request writer; 0 for a server
+  // A reply writer in `partition` (a server's, one per caller partition), or a negative DDS
+  // return code (under DDS Security: the permissions do not grant the partition).
+  dds_entity_t createReplyWriter(const std::string& partition) const;
   std::uint32_t domainId() const { return domain_id_; }  // the actual id (the default resolved)
   const std::string& writerTopic() const { return writer_topic_; }
   const std::string& readerTopic() const { return reader_topic_; }
-  // The partitions of the request writer (client) or reader (server).
+  // The partitions of the request writer and reply reader (client), or the request reader (server).
   const std::vector<std::string>& requestPartitions() const { return request_partitions_; }
 
  private:
-  dds_entity_t participant_ = 0, reader_ = 0, writer_ = 0;
+  dds_entity_t participant_ = 0, reader_ = 0, writer_ = 0, reply_topic_entity_ = 0;
+  dds_qos_t* qos_ = nullptr;  // both topics' QoS (reliable, keep all)
   std::uint32_t domain_id_ = 0;
   std::string writer_topic_, reader_topic_;
   std::vector<std::string> request_partitions_;

@@ -1,6 +1,8 @@
 #pragma once
 // The server side of the Cyclone DDS transport. One receive thread waits on a waitset for
-// requests on "<service>_request" and answers on "<service>_reply":
+// requests on "<service>_request" and answers on "<service>_reply", each reply in the caller
+// partition its request was published in (a reply writer per caller partition; a request
+// from a publication in no caller partition is not served: dds_partitions.hpp):
 //  - requests addressed to another server instance are dropped silently (it answers them);
 //  - ServiceApi::admit() refusing a request is answered at once with its status;
 //  - the others wait in their writer's lane (fair_scheduler.hpp): writers are served one
