@@ -6,6 +6,7 @@
 #include <array>
 #include <map>
 
+#include "interpreter_schedule.hpp"
 #include "lowering.hpp"
 #include "robodiff/codegen/sincos_kernel.h"
 
@@ -145,83 +146,27 @@ class Assembler {
 };
 
 
-// What an instruction reads and writes, in slots. Entries of the scheduled stream
-// list these fields in this order: writes first, then reads, then block/index.
-struct Shape {
-  int reads = 0, writes = 0;
-};
-
-Shape shapeOf(Code c) {
-  switch (c) {
-    case Code::Load: return {0, 1};
-    case Code::Store:
-    case Code::StoreNeg: return {1, 0};
-    case Code::Zero:
-    case Code::End: return {0, 0};
-    case Code::SinCos: return {1, 2};
-    case Code::Neg: case Code::Sin: case Code::Cos: case Code::Tan: case Code::Asin: case Code::Acos:
-    case Code::Atan: case Code::Exp: case Code::Log: case Code::Sqrt: case Code::Tanh: case Code::Abs:
-      return {1, 1};
-    case Code::Select: case Code::MulAdd: case Code::MulSub: case Code::SubMul: case Code::MulMul:
-    case Code::AddAdd: case Code::AddSub: case Code::SubAdd: return {3, 1};
-    default: return {2, 1};
-  }
-}
-
-// Scheduling. The assembled program is straight-line code whose slots are reused by
-// liveness; dispatch (one indirect, often mispredicted jump per instruction) dominates
-// its time. Any order that respects the data flow computes every value with the same
-// operations on the same operands, so results are bit-identical; we pick one that puts
-// instructions of one opcode together (greedy list scheduling: keep emitting the
-// current opcode while any instruction of it is ready, else switch to the opcode with
-// the most ready instructions), so that one dispatch runs a tight loop over many
-// independent instructions. Slots are then reassigned by liveness in the new order.
-struct Node {
-  Code code;
-  std::uint32_t reads[3], writes[2];
-  std::uint32_t block = 0, index = 0;
-};
-
-// See step 1b of the constructor. Removes the fused producers from `nodes`.
-void fuseSingleUse(std::vector<Node>& nodes, std::uint32_t nconst, std::uint32_t values) {
-  std::vector<std::uint32_t> uses(values, 0), producer(values, ~0u);
-  for (std::uint32_t k = 0; k < nodes.size(); ++k) {
-    const Shape sh = shapeOf(nodes[k].code);
-    for (int r = 0; r < sh.reads; ++r) ++uses[nodes[k].reads[r]];
-    for (int w = 0; w < sh.writes; ++w) producer[nodes[k].writes[w]] = k;
-  }
-  std::vector<char> dead(nodes.size(), 0);
-  for (Node& n : nodes) {
-    if (n.code != Code::Add && n.code != Code::Sub && n.code != Code::Mul) continue;
-    // The operand to absorb: produced by a Mul or an Add read only here.
-    for (int side = 0; side < 2; ++side) {
-      const std::uint32_t x = n.reads[side], other = n.reads[1 - side];
-      if (x < nconst || x == other || uses[x] != 1) continue;
-      const std::uint32_t pk = producer[x];
-      if (pk == ~0u || dead[pk]) continue;
-      const Node& p = nodes[pk];
-      Code fused = Code::End;
-      if (p.code == Code::Mul) {
-        if (n.code == Code::Mul) fused = Code::MulMul;                        // (a*b)*c, c*(a*b)
-        else if (n.code == Code::Add) fused = Code::MulAdd;                   // a*b + c, c + a*b
-        else fused = side == 0 ? Code::MulSub : Code::SubMul;                 // a*b - c, c - a*b
-      } else if (p.code == Code::Add) {
-        if (n.code == Code::Add) fused = Code::AddAdd;                        // (a+b) + c, c + (a+b)
-        else if (n.code == Code::Sub) fused = side == 0 ? Code::AddSub : Code::SubAdd;  // (a+b) - c, c - (a+b)
-      }
-      if (fused == Code::End) continue;
-      n.code = fused;
-      n.reads[0] = p.reads[0];
-      n.reads[1] = p.reads[1];
-      n.reads[2] = other;
-      dead[pk] = 1;
-      break;
+// Assembles the chunk with the constants in the first slots. Their number is known only
+// afterwards, so the locals are assembled against a provisional base and shifted.
+void assembleConstantsFirst(const detail::Chunk& chunk, std::vector<Interpreter::Instruction>& code,
+                            std::vector<double>& constants) {
+  constexpr std::uint32_t kProvisional = 1u << 30;
+  Assembler assembler(code, constants, kProvisional + Assembler::kScratch);
+  assembler.assemble(chunk);
+  const std::uint32_t shift = static_cast<std::uint32_t>(constants.size());
+  auto fix = [&](std::uint32_t& s) {
+    if (s >= kProvisional) s = s - kProvisional + shift;
+  };
+  for (Interpreter::Instruction& ins : code) {
+    switch (ins.code) {
+      case Code::Load: fix(ins.dst); break;
+      case Code::Store:
+      case Code::StoreNeg: fix(ins.c); break;
+      case Code::Zero: break;
+      case Code::SinCos: fix(ins.dst); fix(ins.a); fix(ins.b); break;
+      default: fix(ins.dst); fix(ins.a); fix(ins.b); fix(ins.c); break;
     }
   }
-  std::size_t kept = 0;
-  for (std::size_t k = 0; k < nodes.size(); ++k)
-    if (!dead[k]) nodes[kept++] = nodes[k];
-  nodes.resize(kept);
 }
 
 }  // namespace
@@ -232,175 +177,16 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
   for (const auto& b : function_.outputs) output_sizes_.push_back(b.size());
   const detail::LoweredFunction lowered = detail::lower(graph, function_);
   const detail::Chunk& chunk = lowered.chunks.at(0);
-
-  // Constants take the first slots, so their number must be known before the locals'
-  // base: assemble against a provisional base, then shift local slot numbers.
   std::vector<Instruction> code;
   std::vector<double> constants;
-  constexpr std::uint32_t kProvisional = 1u << 30;
-  Assembler assembler(code, constants, kProvisional + Assembler::kScratch);
-  assembler.assemble(chunk);
-  const std::uint32_t shift = static_cast<std::uint32_t>(constants.size());
-  auto fix = [&](std::uint32_t& s) {
-    if (s >= kProvisional) s = s - kProvisional + shift;
-  };
-  for (Instruction& ins : code) {
-    switch (ins.code) {
-      case Code::Load: fix(ins.dst); break;
-      case Code::Store:
-      case Code::StoreNeg: fix(ins.c); break;
-      case Code::Zero: break;
-      case Code::SinCos: fix(ins.dst); fix(ins.a); fix(ins.b); break;
-      default: fix(ins.dst); fix(ins.a); fix(ins.b); fix(ins.c); break;
-    }
-  }
-  const std::uint32_t nconst = shift;
-  const std::uint32_t nslots = nconst + Assembler::kScratch + chunk.slots;
-
-  // 1. Values (SSA): constants are values 0 .. nconst-1, every write a new value.
-  std::vector<Node> nodes(code.size());
-  std::vector<std::uint32_t> current(nslots);
-  for (std::uint32_t k = 0; k < nslots; ++k) current[k] = k;  // only constants are read unwritten
-  std::uint32_t values = nconst;
-  for (std::size_t k = 0; k < code.size(); ++k) {
-    const Instruction& ins = code[k];
-    Node& n = nodes[k];
-    n.code = ins.code;
-    const Shape sh = shapeOf(ins.code);
-    switch (ins.code) {
-      case Code::Load: n.block = ins.a; n.index = ins.b; break;
-      case Code::Store:
-      case Code::StoreNeg: n.block = ins.a; n.index = ins.b; n.reads[0] = current[ins.c]; break;
-      case Code::Zero: n.block = ins.a; break;
-      default: {
-        const std::uint32_t src[3] = {ins.a, ins.b, ins.c};
-        for (int r = 0; r < sh.reads; ++r) n.reads[r] = current[src[r]];
-      }
-    }
-    const std::uint32_t dst[2] = {ins.dst, ins.b};
-    for (int w = 0; w < sh.writes; ++w) {
-      n.writes[w] = values++;
-      current[dst[w]] = n.writes[w];
-    }
-  }
-
-  // 1b. Fusion of values read once: a product or sum whose only reader multiplies or
-  // adds it becomes part of that reader (MulMul (a*b)*c, MulAdd, MulSub, SubMul, AddAdd
-  // (a+b)+c, AddSub (a+b)-c, SubAdd c-(a+b)). The same operations in the same order,
-  // rounded after each, so results stay bit for bit; one dispatch and one stored value
-  // less each.
-  fuseSingleUse(nodes, nconst, values);
-
-  // 2. Greedy list scheduling by opcode. Zero first (before any store of its block).
-  const std::size_t N = nodes.size();
-  executed_ = N;
-  std::vector<std::uint32_t> waiting(N, 0);  // unscheduled producers still awaited
-  std::vector<std::vector<std::uint32_t>> consumers(values - nconst);
-  for (std::size_t k = 0; k < N; ++k) {
-    const Shape sh = shapeOf(nodes[k].code);
-    for (int r = 0; r < sh.reads; ++r) {
-      const std::uint32_t x = nodes[k].reads[r];
-      if (x < nconst) continue;
-      consumers[x - nconst].push_back(static_cast<std::uint32_t>(k));
-      ++waiting[k];
-    }
-  }
-  constexpr int kCodes = static_cast<int>(Code::End) + 1;
-  std::array<std::vector<std::uint32_t>, kCodes> ready;  // LIFO per opcode
-  std::array<std::size_t, kCodes> ready_head{};
-  std::vector<std::uint32_t> order;
-  order.reserve(N);
-  for (std::size_t k = 0; k < N; ++k)
-    if (nodes[k].code == Code::Zero) order.push_back(static_cast<std::uint32_t>(k));
-  for (std::size_t k = 0; k < N; ++k)
-    if (nodes[k].code != Code::Zero && waiting[k] == 0) ready[static_cast<int>(nodes[k].code)].push_back(static_cast<std::uint32_t>(k));
-  // Urgency: the most opcode changes on any path from an instruction to the end (the
-  // stream is in topological order, so one backward pass). Switching to the opcode of
-  // the most urgent ready instruction keeps long chains of alternating opcodes moving:
-  // UR5's RNEA Jacobian went from 223 groups (most ready first) to 107.
-  std::vector<std::uint32_t> urgency(N, 0);
-  for (std::size_t k = N; k-- > 0;) {
-    const Shape sh = shapeOf(nodes[k].code);
-    for (int w = 0; w < sh.writes; ++w)
-      for (std::uint32_t c : consumers[nodes[k].writes[w] - nconst])
-        urgency[k] = std::max(urgency[k], urgency[c] + (nodes[c].code != nodes[k].code ? 1u : 0u));
-  }
-  int cur = -1;
-  while (order.size() < N) {
-    auto avail = [&](int c) { return ready[c].size() - ready_head[c]; };
-    if (cur < 0 || avail(cur) == 0) {
-      cur = -1;
-      std::uint32_t best_urgency = 0;
-      for (int c = 0; c < kCodes; ++c) {
-        if (avail(c) == 0) continue;
-        std::uint32_t u = 0;
-        for (std::size_t i = ready_head[c]; i < ready[c].size(); ++i) u = std::max(u, urgency[ready[c][i]]);
-        if (cur < 0 || u > best_urgency || (u == best_urgency && avail(c) > avail(cur))) cur = c, best_urgency = u;
-      }
-      if (cur < 0) throw std::logic_error("interpreter: a cycle");
-    }
-    const std::uint32_t k = ready[cur][ready_head[cur]++];  // FIFO: original order among ready ones
-    order.push_back(k);
-    const Shape sh = shapeOf(nodes[k].code);
-    for (int w = 0; w < sh.writes; ++w)
-      for (std::uint32_t c : consumers[nodes[k].writes[w] - nconst])
-        if (--waiting[c] == 0) ready[static_cast<int>(nodes[c].code)].push_back(c);
-  }
-
-  // 3. Slots by liveness in the new order.
-  std::vector<std::uint32_t> last_use(values - nconst, 0), slot(values - nconst, 0);
-  std::vector<char> used(values - nconst, 0);
-  for (std::uint32_t p = 0; p < N; ++p) {
-    const Node& n = nodes[order[p]];
-    const Shape sh = shapeOf(n.code);
-    for (int r = 0; r < sh.reads; ++r)
-      if (n.reads[r] >= nconst) last_use[n.reads[r] - nconst] = p, used[n.reads[r] - nconst] = 1;
-  }
-  std::vector<std::uint32_t> free_slots;
-  std::uint32_t next_slot = nconst;
-  stream_.clear();
-  groups_ = 0;
-  std::size_t count_at = 0;
-  int group_code = -1;
-  for (std::uint32_t p = 0; p < N; ++p) {
-    const Node& n = nodes[order[p]];
-    const Shape sh = shapeOf(n.code);
-    std::uint32_t rs[3] = {0, 0, 0}, ws[2] = {0, 0};
-    for (int r = 0; r < sh.reads; ++r) rs[r] = n.reads[r] < nconst ? n.reads[r] : slot[n.reads[r] - nconst];
-    for (int r = 0; r < sh.reads; ++r) {
-      const std::uint32_t x = n.reads[r];
-      if (x >= nconst && last_use[x - nconst] == p) {
-        last_use[x - nconst] = ~0u;  // freed once even when read twice
-        free_slots.push_back(slot[x - nconst]);
-      }
-    }
-    for (int w = 0; w < sh.writes; ++w) {
-      std::uint32_t s;
-      if (!free_slots.empty()) s = free_slots.back(), free_slots.pop_back();
-      else s = next_slot++;
-      slot[n.writes[w] - nconst] = ws[w] = s;
-    }
-    for (int w = 0; w < sh.writes; ++w)
-      if (!used[n.writes[w] - nconst]) free_slots.push_back(ws[w]);  // never read
-    if (static_cast<int>(n.code) != group_code) {
-      group_code = static_cast<int>(n.code);
-      stream_.push_back(static_cast<std::uint32_t>(n.code));
-      count_at = stream_.size();
-      stream_.push_back(0);
-      ++groups_;
-    }
-    ++stream_[count_at];
-    for (int w = 0; w < sh.writes; ++w) stream_.push_back(ws[w]);
-    for (int r = 0; r < sh.reads; ++r) stream_.push_back(rs[r]);
-    if (n.code == Code::Load || n.code == Code::Store || n.code == Code::StoreNeg) {
-      stream_.push_back(n.block);
-      stream_.push_back(n.index);
-    } else if (n.code == Code::Zero) {
-      stream_.push_back(n.block);
-    }
-  }
-  stream_.push_back(static_cast<std::uint32_t>(Code::End));
-  stream_.push_back(0);
+  assembleConstantsFirst(chunk, code, constants);
+  const std::uint32_t nconst = static_cast<std::uint32_t>(constants.size());
+  detail::ScheduledStream scheduled =
+      detail::scheduleInstructions(code, nconst, nconst + Assembler::kScratch + chunk.slots);
+  executed_ = scheduled.executed;
+  groups_ = scheduled.groups;
+  work_size_ = scheduled.work_size;
+  stream_ = std::move(scheduled.stream);
   // The 16-bit stream, when every field and count fits (all but huge functions); three
   // more zeros, so the last entry's 8-byte read stays inside it.
   stream16_.clear();
@@ -410,11 +196,9 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
     stream_.clear();
     stream_.shrink_to_fit();
   }
-
   code.push_back({Code::End, 0, 0, 0, 0});
   code_ = std::move(code);
   constants_ = std::move(constants);
-  work_size_ = next_slot;
 }
 
 void Interpreter::evaluate(const double* const* in, double* const* out, double* work) const { run(0, in, out, work); }
