@@ -134,4 +134,33 @@ fs::path defaultWorkerExecutable() {
   return {};
 }
 
+void setNonBlocking(int fd) { ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK); }
+
+void closeFd(int& fd) {
+  if (fd >= 0) ::close(fd);
+  fd = -1;
+}
+
+void consumePendingSigpipe() {
+  sigset_t pipe_only;
+  sigemptyset(&pipe_only);
+  sigaddset(&pipe_only, SIGPIPE);
+  const struct timespec zero {};
+  while (::sigtimedwait(&pipe_only, nullptr, &zero) == SIGPIPE) {
+  }
+}
+
+const char* toString(JobState state) {
+  switch (state) {
+    case JobState::Queued: return "queued";
+    case JobState::Running: return "running";
+    case JobState::Succeeded: return "succeeded";
+    case JobState::Failed: return "failed";
+    case JobState::Crashed: return "crashed";
+    case JobState::TimedOut: return "timed out";
+    case JobState::Cancelled: return "cancelled";
+  }
+  return "unknown";
+}
+
 }  // namespace robodiff::workers

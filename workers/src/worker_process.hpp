@@ -1,4 +1,4 @@
-// Starting one robodiff-worker process, and describing how one ended.
+// Starting one robodiff-worker process, its pipes, and describing how it and its jobs ended.
 //
 // The worker leads its own session (so everything it starts can be found and killed,
 // orphans included), dies with the thread that started it (PR_SET_PDEATHSIG), gets the
@@ -27,5 +27,11 @@ WorkerProcess startWorkerProcess(const std::filesystem::path& executable);
 std::string describeWorkerExit(pid_t pid, int status);
 
 bool isExecutableFile(const std::filesystem::path& path);
+
+// The pipes to and from a worker.
+void setNonBlocking(int fd);
+void closeFd(int& fd);  // closes it (when open) and marks it closed (-1)
+// The SIGPIPE a write to a dead worker raised (blocked in the writing thread) is taken off.
+void consumePendingSigpipe();
 
 }  // namespace robodiff::workers
