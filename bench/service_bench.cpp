@@ -7,9 +7,6 @@
 //   - 1, 4 and 8 concurrent clients (threads, one connection each) over both.
 // Uses ../shared's Panda when there, else the project's arm7. Run by hand:
 //   build/bin/service_bench [--robot URDF] [--calls N] [--knots K]
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,14 +15,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
+#include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "bench_daemon.hpp"
+#include "bench_function.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/client/dds_connection.hpp"
 #include "robodiff/client/shm_connection.hpp"
@@ -34,9 +31,9 @@
 namespace fs = std::filesystem;
 using namespace robodiff;
 using Clock = std::chrono::steady_clock;
+using bench::check;
 
 namespace {
-
 
 struct Percentiles {
   double p50 = 0, p99 = 0, max = 0;  // microseconds
@@ -50,13 +47,6 @@ Percentiles percentiles(std::vector<double> us) {
 }
 
 double microsSince(Clock::time_point t) { return std::chrono::duration<double, std::micro>(Clock::now() - t).count(); }
-
-void check(const Status& s, const char* what) {
-  if (!s.ok()) {
-    std::fprintf(stderr, "service_bench: %s failed: %s: %s\n", what, toString(s.code).c_str(), s.message.c_str());
-    std::exit(1);
-  }
-}
 
 struct Row {
   std::string what;
@@ -78,116 +68,114 @@ std::string ratio(double a, double b) {
   return s;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   fs::path robot = fs::path(ROBODIFF_SHARED_DIR) / "robots" / "panda_arm_fixed_fingers.urdf";
   std::string label = "Panda";
-  if (!fs::exists(robot)) {
-    robot = fs::path(ROBODIFF_SOURCE_DIR) / "examples/robots/arm7.urdf";
-    label = "arm7 (no ../shared)";
-  }
   int calls = 20000, knots = 1000;
+};
+
+Args parseArgs(int argc, char** argv) {
+  Args a;
+  if (!fs::exists(a.robot)) {
+    a.robot = fs::path(ROBODIFF_SOURCE_DIR) / "examples/robots/arm7.urdf";
+    a.label = "arm7 (no ../shared)";
+  }
   for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--robot") robot = argv[i + 1], label = fs::path(argv[i + 1]).stem().string();
-    else if (a == "--calls") calls = std::atoi(argv[i + 1]);
-    else if (a == "--knots") knots = std::atoi(argv[i + 1]);
+    const std::string flag = argv[i];
+    if (flag == "--robot") a.robot = argv[i + 1], a.label = fs::path(argv[i + 1]).stem().string();
+    else if (flag == "--calls") a.calls = std::atoi(argv[i + 1]);
+    else if (flag == "--knots") a.knots = std::atoi(argv[i + 1]);
+  }
+  return a;
+}
+
+// One run against a robodiffd started on its own cache and DDS domain: the compiled
+// function, called in this process and over both transports.
+class ServiceBench {
+ public:
+  ServiceBench(const Args& args, const fs::path& dir, int domain)
+      : args_(args),
+        dir_(dir),
+        daemon_(ROBODIFFD_PATH, dir / "cache", domain, dir / "robodiffd.log"),
+        shm_(client::connectShm(shm_options_)) {
+    dds_options_.domain_id = static_cast<std::uint32_t>(domain);
+    dds_ = client::connectDds(dds_options_);
+    function_ = bench::compiledFunction(*shm_, args.robot,
+                                        fs::path(ROBODIFF_SOURCE_DIR) / "examples/specs/rnea_jacobian.json");
+    in_n_ = rpc::inputCount(function_), out_n_ = rpc::outputCount(function_);
+    in_.resize(in_n_ * args.knots), out_.resize(out_n_ * args.knots);
+    for (std::size_t i = 0; i < in_.size(); ++i) in_[i] = 0.1 * std::sin(0.37 * i);
+    openLibraryInProcess();
   }
 
-  const fs::path dir = fs::temp_directory_path() / ("robodiff-service-bench-" + std::to_string(getpid()));
-  fs::create_directories(dir);
-  const std::string uri = "file://" + (fs::path(ROBODIFF_SOURCE_DIR) / "deploy/cyclonedds-loopback.xml").string();
-  setenv("CYCLONEDDS_URI", uri.c_str(), 1);
-  const int domain = 1 + getpid() % 200;
+  void run() {
+    std::printf("robot %s: RNEA Jacobian, %zu inputs, %zu outputs per knot; %d calls per row\n\n",
+                args_.label.c_str(), in_n_, out_n_, args_.calls);
+    timeInProcess();
+    timeRoundTrips();
+    timeBatches();
+    for (const char* transport : {"iceoryx", "dds"})
+      for (int clients : {1, 4, 8}) timeConcurrent(transport, clients);
+  }
+  const std::vector<Row>& rows() const { return rows_; }
 
-  std::vector<Row> rows;
-  {
-    bench::Daemon daemon(ROBODIFFD_PATH, dir / "cache", domain, dir / "robodiffd.log");
-    client::ShmConnectionOptions shm_options;
-    auto shm = client::connectShm(shm_options);
-    client::DdsConnectionOptions dds_options;
-    dds_options.domain_id = static_cast<std::uint32_t>(domain);
-    auto dds = client::connectDds(dds_options);
-
-    rpc::LoadModelRequest load;
-    load.urdf = bench::readText(robot);
-    rpc::LoadModelReply model;
-    check(shm->loadModel(load, model), "LoadModel");
-    rpc::GetFunctionRequest get;
-    get.model_id = model.model_id;
-    get.spec_json = bench::readText(fs::path(ROBODIFF_SOURCE_DIR) / "examples/specs/rnea_jacobian.json");
-    get.wait = true;
-    rpc::GetFunctionReply function;
-    check(shm->getFunction(get, function), "GetFunction");
-    // Wait for the compiled library to replace the interpreter.
-    for (int i = 0;; ++i) {
-      rpc::ListFunctionsReply list;
-      check(shm->listFunctions({}, list), "ListFunctions");
-      if (!list.functions.empty() && list.functions[0].compiled) break;
-      if (i > 1200) {
-        std::fprintf(stderr, "service_bench: the library was not compiled within 120 s\n");
-        return 1;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    const std::size_t in_n = rpc::inputCount(function), out_n = rpc::outputCount(function);
-    std::printf("robot %s: RNEA Jacobian, %zu inputs, %zu outputs per knot; %d calls per row\n\n", label.c_str(), in_n,
-                out_n, calls);
-
-    // The same library, called in this process.
-    cache::Cache cache = cache::Cache::open(dir / "cache");
+ private:
+  // The same library the service serves, from its cache.
+  void openLibraryInProcess() {
+    cache::Cache cache = cache::Cache::open(dir_ / "cache");
     const std::vector<cache::Entry> entries = cache.list();
     std::optional<cache::Artifact> artifact = cache.find(entries.at(0).key);
-    const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(artifact->library());
-    const codegen::CompiledFunction direct = library.function(library.functionNames().at(0));
+    library_ = std::make_unique<codegen::LoadedLibrary>(codegen::LoadedLibrary::open(artifact->library()));
+    direct_ = std::make_unique<codegen::CompiledFunction>(library_->function(library_->functionNames().at(0)));
+  }
 
-    std::vector<double> in(in_n * knots), out(out_n * knots);
-    for (std::size_t i = 0; i < in.size(); ++i) in[i] = 0.1 * std::sin(0.37 * i);
-    std::vector<double> work(std::max(direct.workSize(), direct.batchWorkSize()) * 2);
-    std::vector<const double*> in_blocks;
-    std::vector<double*> out_blocks;
+  // Per block, a pointer into the concatenated buffers (`knots` knots per block).
+  void blocks(std::vector<const double*>& in, std::vector<double*>& out, std::size_t knots) {
+    std::size_t offset = 0;
+    for (const rpc::InputBlock& b : function_.inputs) in.push_back(in_.data() + offset * knots), offset += b.size;
+    offset = 0;
+    for (const rpc::OutputBlock& b : function_.outputs) out.push_back(out_.data() + offset * knots), offset += b.nnz;
+  }
 
-    // Bare call: blocks point into the concatenated buffers.
-    auto blocks = [&](double* in_base, double* out_base) {
-      in_blocks.clear();
-      out_blocks.clear();
-      std::size_t offset = 0;
-      for (const rpc::InputBlock& b : function.inputs) in_blocks.push_back(in_base + offset), offset += b.size;
-      offset = 0;
-      for (const rpc::OutputBlock& b : function.outputs) out_blocks.push_back(out_base + offset), offset += b.nnz;
-    };
-    blocks(in.data(), out.data());
+  void timeInProcess() {
+    std::vector<const double*> in;
+    std::vector<double*> out;
+    blocks(in, out, 1);
+    std::vector<double> work(direct_->workSize());
     std::vector<double> us;
-    for (int i = 0; i < calls; ++i) {
+    for (int i = 0; i < args_.calls; ++i) {
       const auto t = Clock::now();
-      direct.evaluate(in_blocks.data(), out_blocks.data(), work.data());
+      direct_->evaluate(in.data(), out.data(), work.data());
       us.push_back(microsSince(t));
     }
-    const Percentiles bare = percentiles(us);
-    rows.push_back({"in-process call of the compiled library", bare, "reference"});
+    rows_.push_back({"in-process call of the compiled library", percentiles(us), "reference"});
+  }
 
-    auto roundTrips = [&](client::Connection& c, int n) {
-      std::vector<double> lat;
-      std::vector<double> o(out_n);
-      for (int i = 0; i < n; ++i) {
-        const auto t = Clock::now();
-        check(c.evaluate(function.function_id, {in.data(), in_n}, o), "Evaluate");
-        lat.push_back(microsSince(t));
-      }
-      return lat;
-    };
+  std::vector<double> roundTrips(client::Connection& c, int n) {
+    std::vector<double> lat;
+    std::vector<double> o(out_n_);
+    for (int i = 0; i < n; ++i) {
+      const auto t = Clock::now();
+      check(c.evaluate(function_.function_id, {in_.data(), in_n_}, o), "Evaluate");
+      lat.push_back(microsSince(t));
+    }
+    return lat;
+  }
+
+  void timeRoundTrips() {
     // Warm up well: right after the compile the host is still settling (the worker
     // exits, caches are cold); the first 10k calls measured ~30% slower.
-    roundTrips(*shm, 10000);
-    const Percentiles shm_rt = percentiles(roundTrips(*shm, calls));
-    rows.push_back({"Evaluate over iceoryx, 1 client", shm_rt, "target p50 < 10, p99 < 50"});
-    roundTrips(*dds, 1000);
-    const Percentiles dds_rt = percentiles(roundTrips(*dds, calls / 4));
-    rows.push_back({"Evaluate over DDS (loopback), 1 client", dds_rt, "target p50 < 100"});
+    roundTrips(*shm_, 10000);
+    rows_.push_back({"Evaluate over iceoryx, 1 client", percentiles(roundTrips(*shm_, args_.calls)),
+                     "target p50 < 10, p99 < 50"});
+    roundTrips(*dds_, 1000);
+    rows_.push_back({"Evaluate over DDS (loopback), 1 client", percentiles(roundTrips(*dds_, args_.calls / 4)),
+                     "target p50 < 100"});
+  }
 
-    // Batches: in-process batched entry point (one thread), then over each transport.
-    const int repeats = 30;
+  // The batched entry point in this process (one thread), then EvaluateBatch over each transport.
+  void timeBatches() {
+    const int knots = args_.knots, repeats = 30;
     auto batchIn = [&](auto&& run) {
       std::vector<double> lat;
       run();
@@ -200,50 +188,69 @@ int main(int argc, char** argv) {
     };
     std::vector<const double*> bin;
     std::vector<double*> bout;
-    {
-      std::size_t offset = 0;
-      for (const rpc::InputBlock& b : function.inputs) bin.push_back(in.data() + offset * knots), offset += b.size;
-      offset = 0;
-      for (const rpc::OutputBlock& b : function.outputs) bout.push_back(out.data() + offset * knots), offset += b.nnz;
-    }
-    std::vector<double> bwork(direct.batchWorkSize());
-    const Percentiles local_batch =
-        batchIn([&] { direct.evaluateBatch(knots, bin.data(), bout.data(), bwork.data()); });
-    rows.push_back({"EvaluateBatch " + std::to_string(knots) + " knots, in process (1 thread)", local_batch, "reference"});
-    const Percentiles shm_batch =
-        batchIn([&] { check(shm->evaluateBatch(function.function_id, knots, in, out), "EvaluateBatch"); });
-    rows.push_back({"EvaluateBatch " + std::to_string(knots) + " knots over iceoryx", shm_batch,
-                    ratio(shm_batch.p50, local_batch.p50) + " of in-process (target <= 1.5x)"});
-    const Percentiles dds_batch =
-        batchIn([&] { check(dds->evaluateBatch(function.function_id, knots, in, out), "EvaluateBatch"); });
-    rows.push_back({"EvaluateBatch " + std::to_string(knots) + " knots over DDS", dds_batch,
-                    ratio(dds_batch.p50, local_batch.p50) + " of in-process"});
+    blocks(bin, bout, knots);
+    std::vector<double> bwork(direct_->batchWorkSize());
+    const std::string what = "EvaluateBatch " + std::to_string(knots) + " knots";
+    const Percentiles local = batchIn([&] { direct_->evaluateBatch(knots, bin.data(), bout.data(), bwork.data()); });
+    rows_.push_back({what + ", in process (1 thread)", local, "reference"});
+    const Percentiles shm =
+        batchIn([&] { check(shm_->evaluateBatch(function_.function_id, knots, in_, out_), "EvaluateBatch"); });
+    rows_.push_back({what + " over iceoryx", shm, ratio(shm.p50, local.p50) + " of in-process (target <= 1.5x)"});
+    const Percentiles dds =
+        batchIn([&] { check(dds_->evaluateBatch(function_.function_id, knots, in_, out_), "EvaluateBatch"); });
+    rows_.push_back({what + " over DDS", dds, ratio(dds.p50, local.p50) + " of in-process"});
+  }
 
-    // Concurrent clients, each its own connection and thread.
-    for (const char* transport : {"iceoryx", "dds"}) {
-      for (int clients : {1, 4, 8}) {
-        const int per_client = (std::string(transport) == "dds" ? calls / 8 : calls / 2) / clients;
-        std::vector<std::vector<double>> lat(clients);
-        std::vector<std::thread> threads;
-        const auto start = Clock::now();
-        for (int k = 0; k < clients; ++k)
-          threads.emplace_back([&, k] {
-            std::unique_ptr<client::Connection> c;
-            if (std::string(transport) == "dds") c = client::connectDds(dds_options);
-            else c = client::connectShm(shm_options);
-            roundTrips(*c, 200);
-            lat[k] = roundTrips(*c, per_client);
-          });
-        for (std::thread& t : threads) t.join();
-        const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-        std::vector<double> all;
-        for (auto& l : lat) all.insert(all.end(), l.begin(), l.end());
-        char note[96];
-        std::snprintf(note, sizeof note, "%.0f calls/s in all (incl. connecting)", all.size() / seconds);
-        rows.push_back({std::string("Evaluate over ") + transport + ", " + std::to_string(clients) + " concurrent clients",
-                        percentiles(all), note});
-      }
-    }
+  // Concurrent clients, each its own connection and thread.
+  void timeConcurrent(const std::string& transport, int clients) {
+    const int per_client = (transport == "dds" ? args_.calls / 8 : args_.calls / 2) / clients;
+    std::vector<std::vector<double>> lat(clients);
+    std::vector<std::thread> threads;
+    const auto start = Clock::now();
+    for (int k = 0; k < clients; ++k)
+      threads.emplace_back([&, k] {
+        std::unique_ptr<client::Connection> c =
+            transport == "dds" ? client::connectDds(dds_options_) : client::connectShm(shm_options_);
+        roundTrips(*c, 200);
+        lat[k] = roundTrips(*c, per_client);
+      });
+    for (std::thread& t : threads) t.join();
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    std::vector<double> all;
+    for (auto& l : lat) all.insert(all.end(), l.begin(), l.end());
+    char note[96];
+    std::snprintf(note, sizeof note, "%.0f calls/s in all (incl. connecting)", all.size() / seconds);
+    rows_.push_back(
+        {"Evaluate over " + transport + ", " + std::to_string(clients) + " concurrent clients", percentiles(all), note});
+  }
+
+  const Args& args_;
+  const fs::path dir_;
+  bench::Daemon daemon_;
+  client::ShmConnectionOptions shm_options_;
+  client::DdsConnectionOptions dds_options_;
+  std::unique_ptr<client::Connection> shm_, dds_;
+  rpc::GetFunctionReply function_;
+  std::size_t in_n_ = 0, out_n_ = 0;
+  std::vector<double> in_, out_;
+  std::unique_ptr<codegen::LoadedLibrary> library_;
+  std::unique_ptr<codegen::CompiledFunction> direct_;
+  std::vector<Row> rows_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parseArgs(argc, argv);
+  const fs::path dir = fs::temp_directory_path() / ("robodiff-service-bench-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string uri = "file://" + (fs::path(ROBODIFF_SOURCE_DIR) / "deploy/cyclonedds-loopback.xml").string();
+  setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+  std::vector<Row> rows;
+  {
+    ServiceBench bench(args, dir, 1 + getpid() % 200);
+    bench.run();
+    rows = bench.rows();
   }
   printRows(rows);
   fs::remove_all(dir);

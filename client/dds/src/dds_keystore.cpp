@@ -105,6 +105,23 @@ std::string isoDate(int days) {
 // Every DDS domain id the access-control plugin accepts (0 .. 230).
 const char* kDomains = "<domains><id_range><min>0</min><max>230</max></id_range></domains>";
 
+// Every topic: discovery, liveliness and data encrypted, reads and writes checked against
+// the permissions; metadata encrypted only on request.
+std::string topicAccessRulesXml(bool protect_metadata) {
+  return std::string(R"(<topic_access_rules>
+        <topic_rule>
+          <topic_expression>*</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>true</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>)") +
+         (protect_metadata ? "ENCRYPT" : "NONE") + R"(</metadata_protection_kind>
+          <data_protection_kind>ENCRYPT</data_protection_kind>
+        </topic_rule>
+      </topic_access_rules>)";
+}
+
 std::string governanceXml(const KeystoreOptions& options) {
   return std::string(R"(<?xml version="1.0" encoding="UTF-8"?>
 <!-- robodiff DDS Security governance: every participant must authenticate; discovery,
@@ -122,17 +139,7 @@ std::string governanceXml(const KeystoreOptions& options) {
       <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
       <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
       <rtps_protection_kind>NONE</rtps_protection_kind>
-      <topic_access_rules>
-        <topic_rule>
-          <topic_expression>*</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>true</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>)" + std::string(options.protect_metadata ? "ENCRYPT" : "NONE") + R"(</metadata_protection_kind>
-          <data_protection_kind>ENCRYPT</data_protection_kind>
-        </topic_rule>
-      </topic_access_rules>
+      )" + topicAccessRulesXml(options.protect_metadata) + R"(
     </domain_rule>
   </domain_access_rules>
 </dds>
