@@ -1,42 +1,9 @@
 #pragma once
 // The physically consistent inertial-parameter fit as a NonlinearProgram: unconstrained
 // in the log-Cholesky coordinates theta (10 per body, physical_log_cholesky.hpp), so any
-// iterate is a physically valid robot.
-//
-// The data enter only through the normal equations of the weighted least-squares problem
-//   ||W pi - tau||^2_D = pi^T G pi - 2 g^T pi + c,   G = W^T D W, g = W^T D tau, c = tau^T D tau
-// (D = diag(row weights)), so the solver never touches the (N nv) x (10 nb) regressor W.
-//
-// Objective (normalised by the data's energy E = c, so that it is about 1 at pi = 0 and
-// Ipopt's tolerances mean the same for 100 or 100,000 samples):
-//   f(theta) = ||W pi(theta) - tau||^2_D / E + lambda (Q(pi) + w_D sum_b D_b(theta_b))
-//
-// Q: the quadratic pull towards the prior pi0 (the URDF's values),
-//   Q(pi) = sum_k s_k (pi_k - pi0_k)^2,  s_k = 1 / scale_k^2,
-// with, per body b, the scales   mass: m_b,  first moment: m_b r_b,  rotational inertia: m_b r_b^2,
-// m_b the prior mass and r_b = sqrt(tr(I_o) / (2 m_b)) the RMS distance of the prior's mass
-// from the joint frame's origin (at least 1 cm; a massless prior takes the mean of the
-// others' mass and radius). So Q counts deviations relative to each body's own size, and
-// lambda is the cost, as a fraction of the torques' sum of squares, of moving one parameter
-// by its body's scale.
-//
-// D_b: the log-det (Bregman) divergence of the body's pseudo-inertia J_b from a centre C_b
-// (the geometric prior of Lee & Wensing 2020, paired with log-Cholesky by Rucker & Wensing 2022),
-//   D_b = tr(C_b^-1 J_b) - log det(C_b^-1 J_b) - 4  >= 0,  0 only at J_b = C_b,
-// C_b the prior body when it is strictly valid, else a body of mass m_b spread isotropically
-// with RMS radius r_b about the origin. It is a barrier: it grows without bound towards the
-// boundary of the valid set, so the optimum is strictly inside it even when the data (and Q)
-// would rather have a degenerate body, and theta stays finite. In theta it is cheap:
-// tr(C^-1 J) is linear in pi, and log det J(theta) = 8 alpha + 2 (d1 + d2 + d3) exactly.
-// w_D (default 1) weighs it against Q; 0 leaves Q alone (boundary optima then make theta
-// drift towards infinity, and bodies numerically flat).
-//
-// Derivatives: pi(theta) is body by body, its Jacobian J (block diagonal) and weighted
-// Hessians come from robodiff's generated code (physical_log_cholesky_derivatives.hpp); with
-//   p = d f / d pi = 2 (G pi - g) / E + lambda (2 S (pi - pi0) + w_D a),  a_b = d tr(C_b^-1 J_b) / d pi_b,
-//   grad f = J^T p - lambda w_D d(sum_b log det J_b) / d theta,
-//   hess f = J^T (2 G / E + 2 lambda S) J + blockdiag_b(sum_k p_k d^2 pi_k / d theta_b^2),
-// dense across bodies through G (the lower triangle is given to Ipopt).
+// iterate is a physically valid robot. The data enter only through the normal equations;
+// the objective (least squares, a pull towards the URDF's values and a log-det barrier)
+// and its derivatives are derived in docs/physical-fit.md.
 
 #include <cstdint>
 #include <functional>
