@@ -3,13 +3,14 @@
 // without ../shared) compiled; then 4 well-behaved clients (threads, each its own iceoryx
 // client port) call Evaluate with a deadline for `--seconds`, first alone, then while
 //   - one client floods garbage chunks (random bytes from a raw iceoryx client) as fast
-//     as it can, and
+//     as it can, on a session it opened (its own request queue, as every connection
+//     has) or, with --garbage-port shared, on the shared port where sessions open, and
 //   - another floods valid but expensive EvaluateBatch requests (`--knots` knots, 4
 //     threads on one connection).
 // Prints, per client and in all: unloaded calls/s, loaded calls/s, their ratio (target
 // >= 0.5) and deadline misses (target 0).
 //   build/bin/flood_bench [--robot URDF] [--seconds S] [--deadline-ms D] [--knots K] [--robodiffd PATH]
-//                         [--flood both|garbage|batches]
+//                         [--flood both|garbage|batches] [--garbage-port session|shared]
 #include <unistd.h>
 
 #include <atomic>
@@ -24,8 +25,10 @@
 #include <vector>
 
 #include "bench_daemon.hpp"
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_client.hpp"
 #include "robodiff/client/shm_connection.hpp"
+#include "robodiff/schema/shm_codec.hpp"
 
 namespace fs = std::filesystem;
 using namespace robodiff;
@@ -70,12 +73,44 @@ std::vector<ClientResult> measure(const rpc::GetFunctionReply& function, int cli
   return results;
 }
 
-// Random bytes as requests, as fast as the queue takes them (robodiffd connects only
-// clients that wait while its queue is full).
-void floodGarbage(Load& load) {
+iox::popo::ClientOptions waiting() {  // robodiffd connects only clients that wait while its queue is full
   iox::popo::ClientOptions options;
   options.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
-  iox::popo::UntypedClient raw({"robodiff", "robodiff", "rpc"}, options);
+  return options;
+}
+
+// Opens a session by hand on the shared port (what connectShm does): its iceoryx event.
+std::string openSession() {
+  iox::popo::UntypedClient hello({"robodiff", "robodiff", "rpc"}, waiting());
+  for (int i = 0; i < 3000 && hello.getConnectionState() != iox::ConnectionState::CONNECTED; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  auto loaned = hello.loan(static_cast<std::uint32_t>(shm::chunkSize(0, 0)), 8);
+  if (loaned.has_error()) return "";
+  rpc::RequestHeader header;
+  header.client_id = "flooder";
+  shm::writeSessionOpen(loaned.value(), header);
+  if (hello.send(loaned.value()).has_error()) return "";
+  for (int i = 0; i < 3000; ++i, std::this_thread::sleep_for(std::chrono::milliseconds(1))) {
+    auto taken = hello.take();
+    if (taken.has_error()) continue;
+    shm::ReplyView view;
+    const Status s = shm::parseSessionReply(
+        taken.value(), iox::mepoo::ChunkHeader::fromUserPayload(taken.value())->userPayloadSize(), view);
+    std::string event;
+    if (s.ok() && view.header.status.ok()) event.assign(reinterpret_cast<const char*>(view.body.data()), view.body.size());
+    hello.releaseResponse(taken.value());
+    return event;
+  }
+  return "";
+}
+
+// Random bytes as requests, as fast as the queue takes them, on its own session or the
+// shared port.
+void floodGarbage(Load& load, bool on_session) {
+  const std::string event = on_session ? openSession() : "rpc";
+  if (event.empty()) return (void)std::fprintf(stderr, "flood_bench: the garbage flooder could not open a session\n");
+  iox::popo::UntypedClient raw(
+      {"robodiff", "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event.c_str())}, waiting());
   std::mt19937_64 random(11);
   while (!load.stop.load()) {
     const std::uint32_t size = 16 + static_cast<std::uint32_t>(random() % 400);
@@ -121,7 +156,7 @@ int main(int argc, char** argv) {
   fs::path robot = fs::path(ROBODIFF_SHARED_DIR) / "robots" / "panda_arm_fixed_fingers.urdf";
   if (!fs::exists(robot)) robot = fs::path(ROBODIFF_SOURCE_DIR) / "examples/robots/arm7.urdf";
   fs::path robodiffd = ROBODIFFD_PATH;
-  std::string flood = "both";
+  std::string flood = "both", garbage_port = "session";
   double seconds = 5;
   int deadline_ms = 50, knots = 1000;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -132,6 +167,7 @@ int main(int argc, char** argv) {
     else if (a == "--knots") knots = std::atoi(argv[i + 1]);
     else if (a == "--robodiffd") robodiffd = argv[i + 1];
     else if (a == "--flood") flood = argv[i + 1];
+    else if (a == "--garbage-port") garbage_port = argv[i + 1];
   }
   const auto deadline = std::chrono::milliseconds(deadline_ms);
   const fs::path dir = fs::temp_directory_path() / ("robodiff-flood-bench-" + std::to_string(getpid()));
@@ -161,10 +197,11 @@ int main(int argc, char** argv) {
       if (i > 1200) return std::fprintf(stderr, "flood_bench: not compiled within 120 s\n"), 1;
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
-    std::printf("robot %s, RNEA Jacobian; %d well-behaved clients, %.1f s per phase, deadline %d ms; flood: %s\n",
-                robot.stem().c_str(), kClients, seconds, deadline_ms, flood.c_str());
+    std::printf("robot %s, RNEA Jacobian; %d well-behaved clients, %.1f s per phase, deadline %d ms; flood: %s "
+                "(garbage on the %s port)\n",
+                robot.stem().c_str(), kClients, seconds, deadline_ms, flood.c_str(), garbage_port.c_str());
     unloaded = measure(function, kClients, seconds, deadline);
-    std::thread garbage([&] { if (flood != "batches") floodGarbage(load); });
+    std::thread garbage([&] { if (flood != "batches") floodGarbage(load, garbage_port != "shared"); });
     std::thread batches([&] { if (flood != "garbage") floodBatches(load, function, knots); });
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     loaded = measure(function, kClients, seconds, deadline);

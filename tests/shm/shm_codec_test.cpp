@@ -6,6 +6,7 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <vector>
 
 #include "robodiff/schema/shm_codec.hpp"
 #include "robodiff/schema/shm_mempools.hpp"
@@ -343,6 +344,38 @@ TEST(ShmCodec, ReplyChunkCarriesStatusAndBody) {
   // Ids that do not fit are refused before writing.
   EXPECT_EQ(checkId("client id", std::string(64, 'a')).code, StatusCode::InvalidArgument);
   EXPECT_TRUE(checkId("client id", std::string(63, 'a')).ok());
+}
+
+// The session handshake's chunks: an open is not a request (and the reverse), and the
+// reply carries the session's event only when the status is OK.
+TEST(ShmCodec, SessionChunksRoundTripAndAreNotRequests) {
+  std::vector<std::uint64_t> storage(64);
+  void* chunk = storage.data();
+  rpc::RequestHeader request;
+  request.client_id = "host:1:abc";
+  request.correlation_id = 7;
+  writeSessionOpen(chunk, request);
+  RequestView open;
+  ASSERT_TRUE(parseSessionOpen(chunk, chunkSize(0, 0), open).ok());
+  EXPECT_EQ(open.header.client_id, "host:1:abc");
+  EXPECT_EQ(open.header.correlation_id, 7u);
+  const Status not_request = parseRequest(chunk, chunkSize(0, 0), open);
+  EXPECT_EQ(not_request.code, StatusCode::InvalidArgument);
+  EXPECT_NE(not_request.message.find("session open"), std::string::npos) << not_request.message;
+
+  rpc::ReplyHeader reply;
+  reply.correlation_id = 7;
+  writeSessionReply(chunk, reply, "rpc.1.0123456789abcdef");
+  ReplyView view;
+  ASSERT_TRUE(parseSessionReply(chunk, chunkSize(0, 22), view).ok());
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(view.body.data()), view.body.size()), "rpc.1.0123456789abcdef");
+  EXPECT_FALSE(parseReply(chunk, chunkSize(0, 22), view).ok());
+
+  reply.status = {StatusCode::ResourceExhausted, "full"};
+  writeSessionReply(chunk, reply, "ignored");
+  ASSERT_TRUE(parseSessionReply(chunk, chunkSize(wireMessage(reply.status).size(), 0), view).ok());
+  EXPECT_EQ(view.header.status.code, StatusCode::ResourceExhausted);
+  EXPECT_TRUE(view.body.empty());
 }
 
 TEST(ShmMempools, DeployRoudiTomlMatchesTheCompiledTable) {

@@ -38,15 +38,15 @@ class ShmFairness : public ::testing::Test {
     fake_.reset();
   }
 
-  // A foreign iceoryx client sending random bytes as fast as it can until `stop`;
-  // counts the chunks sent and the replies it got back.
+  // A foreign iceoryx client sending random bytes as fast as it can until `stop`, on the
+  // shared port ("rpc") or on a session it opened; counts the chunks sent and the
+  // replies it got back.
   void floodGarbage(const std::atomic<bool>& stop, std::atomic<std::uint64_t>& sent,
-                    std::atomic<std::uint64_t>& replies) {
-    iox::popo::ClientOptions waits;  // the only clients robodiffd connects: a flooder too
-    waits.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
-    iox::popo::UntypedClient raw(
-        {"robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service_.c_str()), "rpc"}, waits);
-    waitUntil([&] { return raw.getConnectionState() == iox::ConnectionState::CONNECTED; }, 3s);
+                    std::atomic<std::uint64_t>& replies, bool own_session = false) {
+    const std::string event = own_session ? openRawSession(service_) : "rpc";
+    ASSERT_FALSE(event.empty());
+    auto port = rawClient(service_, event);  // waits while the queue is full, as robodiffd requires
+    auto& raw = *port;
     std::mt19937_64 random(7);
     while (!stop.load()) {
       const std::uint32_t size = 16 + static_cast<std::uint32_t>(random() % 200);
@@ -71,7 +71,8 @@ class ShmFairness : public ::testing::Test {
 // The case: one local process flooding malformed iceoryx requests starved the
 // others (55k -> 500 calls/s, deadlines missed: a full iceoryx queue dropped their
 // requests). A well-behaved client keeps being served, correctly and within its 2 s
-// deadline, and the flooder gets at most its error budget of replies.
+// deadline, and the flooder gets at most its error budget of replies. Here the flooder
+// floods the shared port (where sessions open; the client's requests go to its own).
 TEST_F(ShmFairness, MalformedFloodDoesNotStarveAWellBehavedClient) {
   startServer(2, 64);
   auto c = connect(service_);
@@ -111,6 +112,54 @@ TEST_F(ShmFairness, MalformedFloodDoesNotStarveAWellBehavedClient) {
   EXPECT_NE(dropper.getConnectionState(), iox::ConnectionState::CONNECTED);
   std::printf("well-behaved: %d calls in %.1f s while the flooder sent %llu garbage chunks (%llu answered)\n", calls,
               seconds, static_cast<unsigned long long>(sent.load()), static_cast<unsigned long long>(replies.load()));
+}
+
+// A flooder on its own session (what a connection's port is) fills only its own queue:
+// past its error budget the server stops taking from it for the rest of the second. A
+// well-behaved client misses no deadline (50 ms) and a client connecting meanwhile opens
+// its session at once.
+TEST_F(ShmFairness, GarbageFloodOnItsOwnSessionDoesNotDelayOthers) {
+  startServer(2, 64);
+  auto c = connect(service_);
+  ASSERT_TRUE(c);
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> sent{0}, replies{0};
+  std::thread flooder([&] { floodGarbage(stop, sent, replies, /*own_session=*/true); });
+  // Past its 100 error replies the flooder's session is paused: it sends its queue full
+  // (16) and then waits in its send until the next second.
+  if (!waitUntil([&] { return sent.load() > 110; }, 5s)) {
+    stop = true;
+    flooder.join();
+    FAIL() << "the flooder did not get going";
+  }
+
+  int calls = 0, misses = 0, errors = 0;
+  std::string first_failure;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < 2s) {
+    const double base = calls;
+    const std::vector<double> in{base, 1, 2};
+    std::vector<double> out(3);
+    const Status s = c->evaluate("double", in, out, {50ms});
+    if (s.code == StatusCode::DeadlineExceeded) ++misses;
+    else if (!s.ok() || out[0] != 2 * base) ++errors, first_failure = toString(s.code) + ": " + s.message;
+    else ++calls;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  auto late = connect(service_);
+  const auto connect_time = std::chrono::steady_clock::now() - t0;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stop = true;
+  flooder.join();
+  EXPECT_EQ(misses, 0);
+  EXPECT_EQ(errors, 0) << first_failure;
+  EXPECT_GE(calls, 200) << "the well-behaved client was slowed down";
+  ASSERT_TRUE(late);
+  EXPECT_LT(connect_time, 1s);
+  EXPECT_LE(replies.load(), static_cast<std::uint64_t>(100 * (seconds + 3))) << sent.load() << " garbage chunks sent";
+  EXPECT_LE(sent.load(), static_cast<std::uint64_t>(150 * (seconds + 3))) << "the paused session was drained";
+  std::printf("well-behaved: %d calls in 2 s while the flooder sent %llu garbage chunks on its session (%llu answered)\n",
+              calls, static_cast<unsigned long long>(sent.load()), static_cast<unsigned long long>(replies.load()));
 }
 
 // A client flooding slow posted requests keeps at most max_running of them in the

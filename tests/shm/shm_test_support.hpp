@@ -9,11 +9,16 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
 
 #include "fake_service.hpp"
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
+#include "iceoryx_posh/popo/untyped_client.hpp"
+#include "robodiff/schema/shm_codec.hpp"
 #include "robodiff/client/shm_connection.hpp"
 #include "robodiff/server/shm_server.hpp"
 #include "roudi_fixture.hpp"
@@ -65,6 +70,60 @@ inline std::unique_ptr<client::ShmConnection> connect(std::string service,
   auto c = client::connectShm(options, status);
   EXPECT_TRUE(status.ok()) << toString(status.code) << ": " << status.message;
   return c;
+}
+
+// A raw iceoryx client port on ("robodiff", service, event), as robodiffd connects them
+// (waiting while the server's queue is full).
+inline std::unique_ptr<iox::popo::UntypedClient> rawClient(const std::string& service, const std::string& event) {
+  iox::popo::ClientOptions waits;
+  waits.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
+  auto raw = std::make_unique<iox::popo::UntypedClient>(
+      iox::capro::ServiceDescription("robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
+                                     iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event.c_str())),
+      waits);
+  waitUntil([&] { return raw->getConnectionState() == iox::ConnectionState::CONNECTED; }, std::chrono::seconds(3));
+  return raw;
+}
+
+// Sends `fill`'s chunk of `size` bytes on `raw` and returns the reply's status (its body
+// into `body`), or INTERNAL when none comes within 3 s.
+template <class Fill>
+Status rawExchange(iox::popo::UntypedClient& raw, std::uint32_t size, Fill&& fill, std::string* body = nullptr,
+                   bool session_reply = false) {
+  auto loaned = raw.loan(size, 8);
+  if (loaned.has_error()) return {StatusCode::Internal, "loan failed"};
+  std::memset(loaned.value(), 0, size);
+  fill(static_cast<std::byte*>(loaned.value()));
+  if (raw.send(loaned.value()).has_error()) return {StatusCode::Internal, "send failed"};
+  const void* response = nullptr;
+  waitUntil([&] {
+    auto taken = raw.take();
+    if (!taken.has_error()) response = taken.value();
+    return response != nullptr;
+  }, std::chrono::seconds(3));
+  if (response == nullptr) return {StatusCode::Internal, "no reply"};
+  shm::ReplyView view;
+  const auto bytes = iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize();
+  Status s = session_reply ? shm::parseSessionReply(response, bytes, view) : shm::parseReply(response, bytes, view);
+  if (s.ok() && body) body->assign(reinterpret_cast<const char*>(view.body.data()), view.body.size());
+  raw.releaseResponse(response);
+  return s.ok() ? view.header.status : s;
+}
+
+// Opens a session by hand on the shared port; its event ("rpc.<n>.<random>") or "".
+inline std::string openRawSession(const std::string& service, Status* status = nullptr) {
+  auto hello = rawClient(service, "rpc");
+  std::string event;
+  const Status s = rawExchange(
+      *hello, static_cast<std::uint32_t>(shm::chunkSize(0, 0)),
+      [](std::byte* chunk) {
+        rpc::RequestHeader h;
+        h.client_id = "raw-session";
+        shm::writeSessionOpen(chunk, h);
+      },
+      &event, /*session_reply=*/true);
+  if (status) *status = s;
+  return s.ok() ? event : "";
 }
 
 }  // namespace robodiff::testing

@@ -161,34 +161,15 @@ TEST_F(ShmTransport, OversizedBatchIsRefusedAndTheProcessSurvives) {
   EXPECT_EQ(ok_out.back(), 2.0);
 }
 
-// A foreign client sends chunks that are not robodiff requests: the server answers
-// INVALID_ARGUMENT (matched by iceoryx sequence id) and keeps serving.
+// A foreign client sends chunks that are not robodiff requests on its session: the server
+// answers INVALID_ARGUMENT (matched by iceoryx sequence id) and keeps serving.
 TEST_F(ShmTransport, MalformedRequestChunksAreInvalidArgument) {
   startServer();
-  iox::popo::ClientOptions waits;  // robodiffd connects only clients that wait while its queue is full
-  waits.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
-  iox::popo::UntypedClient raw({"robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service_.c_str()), "rpc"},
-                               waits);
-  ASSERT_TRUE(waitUntil([&] { return raw.getConnectionState() == iox::ConnectionState::CONNECTED; }, 3s));
-  auto ask = [&](std::uint32_t size, auto&& fill) {
-    auto loaned = raw.loan(size, 8);
-    EXPECT_FALSE(loaned.has_error());
-    if (loaned.has_error()) return Status{StatusCode::Internal, "loan failed"};
-    std::memset(loaned.value(), 0, size);
-    fill(static_cast<std::byte*>(loaned.value()));
-    EXPECT_FALSE(raw.send(loaned.value()).has_error());
-    const void* response = nullptr;
-    waitUntil([&] {
-      auto taken = raw.take();
-      if (!taken.has_error()) response = taken.value();
-      return response != nullptr;
-    }, 3s);
-    if (response == nullptr) return Status{StatusCode::Internal, "no reply"};
-    shm::ReplyView view;
-    Status s = shm::parseReply(response, iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize(), view);
-    raw.releaseResponse(response);
-    return s.ok() ? view.header.status : s;
-  };
+  const std::string event = openRawSession(service_);  // the connection's own port
+  ASSERT_FALSE(event.empty());
+  auto raw = rawClient(service_, event);
+  ASSERT_EQ(raw->getConnectionState(), iox::ConnectionState::CONNECTED);
+  auto ask = [&](std::uint32_t size, auto&& fill) { return rawExchange(*raw, size, fill); };
   const Status truncated = ask(16, [](std::byte*) {});
   EXPECT_EQ(truncated.code, StatusCode::InvalidArgument);
   EXPECT_NE(truncated.message.find("shorter than"), std::string::npos) << truncated.message;

@@ -1,4 +1,4 @@
-// The iceoryx client: one port, a receive thread dispatching responses to waiting calls.
+// The iceoryx client: a session on the server, its port, a receive thread dispatching responses to waiting calls.
 #include "robodiff/client/shm_connection.hpp"
 
 #include <algorithm>
@@ -37,6 +37,35 @@ const char* loanError(iox::popo::AllocationError error) {
 
 std::string serviceName(const std::string& service) { return "robodiff/" + service + "/rpc"; }
 
+iox::popo::ClientOptions clientOptions() {
+  iox::popo::ClientOptions options;
+  options.responseQueueCapacity = iox::MAX_RESPONSE_QUEUE_CAPACITY;
+  // robodiffd's request queues block a sender while full (never drop another request);
+  // it accepts only clients that wait (server/shm: fair sharing).
+  options.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
+  return options;
+}
+
+iox::capro::ServiceDescription describe(const std::string& service, const std::string& event) {
+  return {"robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
+          iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event.c_str())};
+}
+
+// The port of this connection's session on the server (its own request queue) and the
+// WaitSet the receive thread sleeps on. Replaced when the server restarts.
+struct SessionPort {
+  std::unique_ptr<iox::popo::UntypedClient> port;
+  std::unique_ptr<iox::popo::WaitSet<>> waitset;
+  ~SessionPort() {
+    waitset.reset();  // detaches from the port first
+    // Tells the server this client is gone (its session closes: hasClients()); iceoryx
+    // 2.0 does not when it merely destroys the port.
+    if (port) port->disconnect();
+    port.reset();
+  }
+};
+using SessionPortPtr = std::shared_ptr<SessionPort>;
+
 std::string milliseconds(std::chrono::nanoseconds d) {
   return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(d).count()) + " ms";
 }
@@ -48,15 +77,18 @@ struct ShmConnection::Impl {
   std::string client_id;
   std::atomic<std::uint64_t> next_correlation{1};
 
-  mutable std::mutex port_mutex;  // the iceoryx client port is not thread-safe
-  std::unique_ptr<iox::popo::UntypedClient> port;
-  std::unique_ptr<iox::popo::WaitSet<>> waitset;
+  mutable std::mutex port_mutex;  // the iceoryx client ports are not thread-safe
+  SessionPortPtr session;          // null until a session is open
+  // The shared port: opens sessions (under session_mutex), tells whether a server is there.
+  std::unique_ptr<iox::popo::UntypedClient> hello;
+  std::mutex session_mutex;        // one session open at a time
   std::thread receiver;
   std::atomic<bool> running{false};
 
   // Calls waiting for their reply, by correlation id.
   struct Pending {
     const void* response = nullptr;  // the response chunk, handed over by the receive thread
+    SessionPortPtr from;             // the port it came from (to release it there)
     std::atomic<bool> done{false};  // set under pending_mutex; read without it while spinning
     Status failure;                  // when done without a response
   };
@@ -89,9 +121,21 @@ struct ShmConnection::Impl {
   std::condition_variable slot_cv;
   std::uint32_t slots_used = 0;
 
+  static bool connected(const SessionPortPtr& s) {  // port_mutex held
+    return s && s->port->getConnectionState() == iox::ConnectionState::CONNECTED;
+  }
   bool connected() const {
     std::lock_guard lock(port_mutex);
-    return port->getConnectionState() == iox::ConnectionState::CONNECTED;
+    return connected(session);
+  }
+  // A server offers the service: the session is connected, or the shared port is.
+  bool serverThere() const {
+    std::lock_guard lock(port_mutex);
+    return connected(session) || hello->getConnectionState() == iox::ConnectionState::CONNECTED;
+  }
+  SessionPortPtr currentSession() const {
+    std::lock_guard lock(port_mutex);
+    return session;
   }
 
   Status noServer() const {
@@ -99,9 +143,9 @@ struct ShmConnection::Impl {
                                          " (is robodiffd running with iceoryx enabled?)"};
   }
 
-  void releaseResponse(const void* response) {
+  void releaseResponse(SessionPort& from, const void* response) {
     std::lock_guard lock(port_mutex);
-    port->releaseResponse(response);
+    from.port->releaseResponse(response);
   }
 
   void failAll(const Status& status) {
@@ -118,52 +162,127 @@ struct ShmConnection::Impl {
 
   void receiveLoop() {
     while (running.load()) {
-      waitset->timedWait(iox::units::Duration::fromMilliseconds(20));
+      const SessionPortPtr s = currentSession();
+      if (!s) {
+        std::this_thread::sleep_for(20ms);
+        continue;
+      }
+      s->waitset->timedWait(iox::units::Duration::fromMilliseconds(20));
       if (!running.load()) break;
       for (;;) {
         const void* response = nullptr;
         {
           std::lock_guard lock(port_mutex);
-          auto taken = port->take();
+          auto taken = s->port->take();
           if (taken.has_error()) break;
           response = taken.value();
         }
-        dispatch(response);
+        dispatch(s, response);
       }
-      if (!connected()) failAll({StatusCode::Unavailable, "the robodiff server went away (iceoryx service " +
-                                                              serviceName(options.service) + " is no longer offered)"});
+      bool lost;
+      {
+        std::lock_guard lock(port_mutex);
+        lost = session == s && !connected(s);
+      }
+      if (lost) failAll({StatusCode::Unavailable, "the robodiff server went away (iceoryx service " +
+                                                      serviceName(options.service) + " is no longer offered)"});
     }
   }
 
   // Takes one response, if there is one and the port is free, and dispatches it.
   bool pollOnce() {
     const void* response = nullptr;
+    SessionPortPtr from;
     {
       std::unique_lock lock(port_mutex, std::try_to_lock);
-      if (!lock.owns_lock()) return false;
-      auto taken = port->take();
+      if (!lock.owns_lock() || !session) return false;
+      auto taken = session->port->take();
       if (taken.has_error()) return false;
       response = taken.value();
+      from = session;
     }
-    dispatch(response);
+    dispatch(from, response);
     return true;
   }
 
   // Hands a response to the call it answers: iceoryx gives the response the request's
   // sequence id, which is the request's correlation id.
-  void dispatch(const void* response) {
+  void dispatch(const SessionPortPtr& from, const void* response) {
     const auto id = static_cast<std::uint64_t>(iox::popo::ResponseHeader::fromPayload(response)->getSequenceId());
     {
       std::lock_guard lock(pending_mutex);
       Pending* p = findPending(id);
       if (p != nullptr && !p->done) {
         p->response = response;
+        p->from = from;
         p->done = true;
         pending_cv.notify_all();
         return;
       }
     }
-    releaseResponse(response);  // its caller gave up (timeout)
+    releaseResponse(*from, response);  // its caller gave up (timeout)
+  }
+
+  // Opens a session on the server through the shared port (SessionOpen, shm_codec.hpp)
+  // and connects its port; the connection's requests go there from then on.
+  Status openSession(Clock::time_point deadline) {
+    std::lock_guard opening(session_mutex);
+    if (connected()) return {};  // another caller did it
+    if (hello->getConnectionState() != iox::ConnectionState::CONNECTED) return noServer();
+    rpc::RequestHeader header;
+    header.schema_version = options.schema_version;
+    header.client_id = client_id;
+    header.correlation_id = next_correlation.fetch_add(1);
+    header.server_instance_id = options.server_instance_id;
+    auto loaned = hello->loan(static_cast<std::uint32_t>(shm::chunkSize(0, 0)), shm::kChunkAlignment);
+    if (loaned.has_error())
+      return {StatusCode::ResourceExhausted,
+              std::string("could not loan a chunk to open an iceoryx session: ") + loanError(loaned.get_error())};
+    shm::writeSessionOpen(loaned.value(), header);
+    iox::popo::RequestHeader::fromPayload(loaned.value())->setSequenceId(static_cast<std::int64_t>(header.correlation_id));
+    if (hello->send(loaned.value()).has_error()) return noServer();
+    std::string event;
+    if (Status s = awaitSessionReply(header.correlation_id, deadline, event); !s.ok()) return s;
+    auto fresh = std::make_shared<SessionPort>();
+    fresh->port = std::make_unique<iox::popo::UntypedClient>(describe(options.service, event), clientOptions());
+    fresh->waitset = std::make_unique<iox::popo::WaitSet<>>();
+    if (fresh->waitset->attachState(*fresh->port, iox::popo::ClientState::HAS_RESPONSE).has_error())
+      return {StatusCode::Internal, "could not attach the iceoryx client to a WaitSet"};
+    while (fresh->port->getConnectionState() != iox::ConnectionState::CONNECTED) {
+      if (Clock::now() >= deadline)
+        return {StatusCode::Unavailable, "the robodiff server opened iceoryx session " + event +
+                                             " but its port did not connect in time"};
+      std::this_thread::sleep_for(200us);
+    }
+    std::lock_guard lock(port_mutex);
+    session = std::move(fresh);  // the old one (if any) goes with the last response taken from it
+    return {};
+  }
+
+  // The server's answer to our session open, read from the shared port.
+  Status awaitSessionReply(std::uint64_t correlation, Clock::time_point deadline, std::string& event) {
+    while (Clock::now() < deadline) {
+      auto taken = hello->take();
+      if (taken.has_error()) {
+        std::this_thread::sleep_for(100us);
+        continue;
+      }
+      const void* reply = taken.value();
+      shm::ReplyView view;
+      Status s = shm::parseSessionReply(reply, iox::mepoo::ChunkHeader::fromUserPayload(reply)->userPayloadSize(), view);
+      const bool ours = s.ok() && view.header.correlation_id == correlation;
+      if (ours && view.header.status.ok()) event.assign(reinterpret_cast<const char*>(view.body.data()), view.body.size());
+      if (ours) s = view.header.status;
+      if (!s.ok() && s.code == StatusCode::InvalidArgument && !ours)
+        s = {StatusCode::FailedPrecondition, "the server does not open iceoryx sessions (" + s.message +
+                                                 "): it is older than this client library"};
+      hello->releaseResponse(reply);
+      if (!ours && s.ok()) continue;  // an answer to an earlier open that timed out
+      if (s.ok() && event.empty()) s = {StatusCode::Internal, "the server's session reply names no session"};
+      return s;
+    }
+    return {StatusCode::Unavailable, "the robodiff server did not answer the iceoryx session open on " +
+                                         serviceName(options.service) + " in time"};
   }
 
   // One call: loan a request of chunkSize(0, body_size) bytes, let `fill` write the body,
@@ -214,14 +333,24 @@ struct ShmConnection::Impl {
       }
       ~LoanGuard() { release(); }
     } loan_guard{*this};
-    {
-      std::lock_guard lock(port_mutex);
-      if (port->getConnectionState() != iox::ConnectionState::CONNECTED) return noServer();
-      auto loaned = port->loan(static_cast<std::uint32_t>(size), shm::kChunkAlignment);
-      if (loaned.has_error())
-        return {StatusCode::ResourceExhausted, "could not loan a " + std::to_string(size) + "-byte shared-memory chunk: " +
-                                                   loanError(loaned.get_error()) + "; retry later"};
-      chunk = loaned.value();
+    SessionPortPtr to;  // the session the request goes to, and its reply comes from
+    for (int attempt = 0;; ++attempt) {
+      {
+        std::lock_guard lock(port_mutex);
+        if (connected(session)) {
+          auto loaned = session->port->loan(static_cast<std::uint32_t>(size), shm::kChunkAlignment);
+          if (loaned.has_error())
+            return {StatusCode::ResourceExhausted, "could not loan a " + std::to_string(size) +
+                                                       "-byte shared-memory chunk: " + loanError(loaned.get_error()) +
+                                                       "; retry later"};
+          chunk = loaned.value();
+          to = session;
+          break;
+        }
+      }
+      // No session yet, or the server restarted: open one (once per call).
+      if (attempt > 0) return noServer();
+      if (Status s = openSession(deadline); !s.ok()) return s;
     }
     shm::writeRequestHeader(chunk, header, method, body_size);
     fill(shm::bodyOf(chunk));
@@ -239,7 +368,7 @@ struct ShmConnection::Impl {
     bool sent;
     {
       std::lock_guard lock(port_mutex);
-      sent = !port->send(chunk).has_error();  // on error iceoryx releases the chunk
+      sent = !to->port->send(chunk).has_error();  // on error iceoryx releases the chunk
     }
     loan_guard.release();
     if (!sent) {
@@ -261,6 +390,7 @@ struct ShmConnection::Impl {
     if (waiting.response == nullptr) return waiting.failure;
 
     const void* response = waiting.response;
+    SessionPort& from = *waiting.from;
     const auto response_size = iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize();
     thread_local shm::ReplyView view;  // reused, as the request header above
     Status result = shm::parseReply(response, response_size, view);
@@ -274,7 +404,7 @@ struct ShmConnection::Impl {
     } else {
       result = on_reply(view);
     }
-    releaseResponse(response);
+    releaseResponse(from, response);
     return result;
   }
 
@@ -333,12 +463,12 @@ struct ShmConnection::Impl {
 
   ~Impl() {
     if (running.exchange(false)) {
-      waitset->markForDestruction();
+      if (const SessionPortPtr s = currentSession()) s->waitset->markForDestruction();
       if (receiver.joinable()) receiver.join();
     }
     failAll({StatusCode::Cancelled, "the connection is closing"});
-    waitset.reset();
-    port.reset();
+    session.reset();
+    hello.reset();
   }
 };
 
@@ -382,7 +512,7 @@ Status ShmConnection::evaluateBatch(std::string_view function_id, std::uint64_t 
                                     std::span<double> outputs, CallOptions options) {
   return impl_->evaluate(rpc::Method::EvaluateBatch, function_id, knots, inputs, outputs, options);
 }
-bool ShmConnection::serverConnected() const { return impl_->connected(); }
+bool ShmConnection::serverConnected() const { return impl_->serverThere(); }
 const std::string& ShmConnection::clientId() const { return impl_->client_id; }
 
 std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options, Status& status) {
@@ -407,22 +537,15 @@ std::unique_ptr<ShmConnection> connectShm(const ShmConnectionOptions& options, S
   status = shm::ensureRuntime("robodiff-client");
   if (!status.ok()) return nullptr;
 
-  iox::popo::ClientOptions client_options;
-  client_options.responseQueueCapacity = iox::MAX_RESPONSE_QUEUE_CAPACITY;
-  // robodiffd's request queue blocks a sender while full (never drops another client's
-  // request); it accepts only clients that wait (server/shm: fair sharing).
-  client_options.serverTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::WAIT_FOR_CONSUMER;
-  const iox::capro::ServiceDescription description(
-      "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, options.service.c_str()), "rpc");
-  impl->port = std::make_unique<iox::popo::UntypedClient>(description, client_options);
-  impl->waitset = std::make_unique<iox::popo::WaitSet<>>();
-  if (impl->waitset->attachState(*impl->port, iox::popo::ClientState::HAS_RESPONSE).has_error()) {
-    status = {StatusCode::Internal, "could not attach the iceoryx client to a WaitSet"};
-    return nullptr;
-  }
+  impl->hello = std::make_unique<iox::popo::UntypedClient>(describe(options.service, "rpc"), clientOptions());
   const auto until = Clock::now() + options.connect_timeout;
-  while (!impl->connected() && Clock::now() < until) std::this_thread::sleep_for(1ms);
-  if (!impl->connected() && options.require_server) {
+  while (!impl->serverThere() && Clock::now() < until) std::this_thread::sleep_for(1ms);
+  if (impl->serverThere()) {
+    // The session: within connect_timeout, and at least a second (the server creates a
+    // port for it and RouDi connects ours).
+    status = impl->openSession(std::max(until, Clock::now() + 1s));
+    if (!status.ok() && options.require_server) return nullptr;
+  } else if (options.require_server) {
     status = impl->noServer();
     status.message += "; waited " + milliseconds(options.connect_timeout);
     return nullptr;

@@ -3,6 +3,7 @@
 #include "robodiff/schema/shm_codec.hpp"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -125,6 +126,16 @@ class Reader {
 constexpr std::uint32_t kFunctionStates = 3, kOutputKinds = 3, kOutputLayouts = 2, kServingStates = 3;
 
 // Common header checks; fills method, correlation id and the body span.
+const char* kindName(ChunkKind kind) {
+  switch (kind) {
+    case ChunkKind::Request: return "request";
+    case ChunkKind::Reply: return "reply";
+    case ChunkKind::SessionOpen: return "session open";
+    case ChunkKind::SessionReply: return "session reply";
+  }
+  return "?";
+}
+
 Status parseCommon(const void* chunk, std::size_t chunk_size, ChunkKind kind, ChunkHeader& h,
                    rpc::Method& method, std::span<const std::byte>& body) {
   if (chunk == nullptr) return invalid("no chunk");
@@ -134,8 +145,8 @@ Status parseCommon(const void* chunk, std::size_t chunk_size, ChunkKind kind, Ch
   std::memcpy(&h, chunk, sizeof h);  // a private copy: the checks below hold for what we use
   if (h.magic != kChunkMagic) return invalid("bad magic (not a robodiff chunk)");
   if (h.kind != static_cast<std::uint16_t>(kind))
-    return invalid(std::string("expected a ") + (kind == ChunkKind::Request ? "request" : "reply") +
-                   " chunk, got kind " + std::to_string(h.kind));
+    return invalid(std::string("expected a ") + kindName(kind) + " chunk, got kind " + std::to_string(h.kind) +
+                   (h.kind == static_cast<std::uint16_t>(ChunkKind::SessionOpen) ? " (a session open)" : ""));
   if (h.method >= rpc::kMethodCount) return invalid("unknown method " + std::to_string(h.method));
   method = static_cast<rpc::Method>(h.method);
   if (h.status_message_length > kMaxStatusMessage)
@@ -225,9 +236,11 @@ std::span<double> writeEvaluateReplyBody(std::byte* body, const EvaluateReplyFix
   return {reinterpret_cast<double*>(body + sizeof fixed), static_cast<std::size_t>(fixed.value_count)};
 }
 
-Status parseRequest(const void* chunk, std::size_t chunk_size, RequestView& view) {
+namespace {
+
+Status parseRequestOf(ChunkKind kind, const void* chunk, std::size_t chunk_size, RequestView& view) {
   ChunkHeader h;
-  if (auto s = parseCommon(chunk, chunk_size, ChunkKind::Request, h, view.method, view.body); !s.ok()) return s;
+  if (auto s = parseCommon(chunk, chunk_size, kind, h, view.method, view.body); !s.ok()) return s;
   if (!readId(h.client_id, view.header.client_id)) return invalid("client id is not NUL-terminated");
   if (!readId(h.server_instance_id, view.header.server_instance_id))
     return invalid("server instance id is not NUL-terminated");
@@ -238,9 +251,9 @@ Status parseRequest(const void* chunk, std::size_t chunk_size, RequestView& view
   return {};
 }
 
-Status parseReply(const void* chunk, std::size_t chunk_size, ReplyView& view) {
+Status parseReplyOf(ChunkKind kind, const void* chunk, std::size_t chunk_size, ReplyView& view) {
   ChunkHeader h;
-  if (auto s = parseCommon(chunk, chunk_size, ChunkKind::Reply, h, view.method, view.body); !s.ok()) return s;
+  if (auto s = parseCommon(chunk, chunk_size, kind, h, view.method, view.body); !s.ok()) return s;
   if (!readId(h.client_id, view.header.client_id)) return invalid("client id is not NUL-terminated");
   if (!readId(h.server_instance_id, view.header.server_instance_id))
     return invalid("server instance id is not NUL-terminated");
@@ -249,6 +262,41 @@ Status parseReply(const void* chunk, std::size_t chunk_size, ReplyView& view) {
   // A code this build does not know (a newer server) reads as UNKNOWN.
   view.header.status.code = statusCodeFromValue(h.status_code).value_or(StatusCode::Unknown);
   view.header.status.message.assign(static_cast<const char*>(chunk) + sizeof(ChunkHeader), h.status_message_length);
+  return {};
+}
+
+void setKind(void* chunk, ChunkKind kind) {
+  const auto value = static_cast<std::uint16_t>(kind);
+  std::memcpy(static_cast<std::byte*>(chunk) + offsetof(ChunkHeader, kind), &value, sizeof value);
+}
+
+}  // namespace
+
+Status parseRequest(const void* chunk, std::size_t chunk_size, RequestView& view) {
+  return parseRequestOf(ChunkKind::Request, chunk, chunk_size, view);
+}
+Status parseReply(const void* chunk, std::size_t chunk_size, ReplyView& view) {
+  return parseReplyOf(ChunkKind::Reply, chunk, chunk_size, view);
+}
+
+void writeSessionOpen(void* chunk, const rpc::RequestHeader& header) {
+  writeRequestHeader(chunk, header, rpc::Method::Health, 0);
+  setKind(chunk, ChunkKind::SessionOpen);
+}
+void writeSessionReply(void* chunk, const rpc::ReplyHeader& header, std::string_view event) {
+  if (!header.status.ok()) event = {};
+  writeReplyHeader(chunk, header, rpc::Method::Health, event.size());
+  setKind(chunk, ChunkKind::SessionReply);
+  std::memcpy(bodyOf(chunk), event.data(), event.size());
+}
+Status parseSessionOpen(const void* chunk, std::size_t chunk_size, RequestView& view) {
+  if (auto s = parseRequestOf(ChunkKind::SessionOpen, chunk, chunk_size, view); !s.ok()) return s;
+  if (!view.body.empty()) return invalid("a session open carries no body");
+  return {};
+}
+Status parseSessionReply(const void* chunk, std::size_t chunk_size, ReplyView& view) {
+  if (auto s = parseReplyOf(ChunkKind::SessionReply, chunk, chunk_size, view); !s.ok()) return s;
+  if (view.body.size() > kSessionEventCapacity) return invalid("a session's event name is longer than 100 characters");
   return {};
 }
 

@@ -280,6 +280,7 @@ int main(int argc, char** argv) {
       options.service = config.shm.service;
       options.fair = {config.limits.max_queued_requests_per_client, config.limits.max_running_requests_per_client};
       options.error_replies_per_second = config.limits.error_replies_per_second;
+      options.sessions.max_sessions = config.limits.max_shm_sessions;
       shm = std::make_unique<ShmServer>(service, options, log);
       if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
         throw std::runtime_error("iceoryx: " + started_shm.message);

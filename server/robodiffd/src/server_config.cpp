@@ -191,6 +191,14 @@ const std::vector<Setting>& settings() {
       clientLimitSetting("limits.max_queued_requests_per_client", &ClientLimits::max_queued_requests_per_client),
       clientLimitSetting("limits.max_running_requests_per_client", &ClientLimits::max_running_requests_per_client),
       clientLimitSetting("limits.error_replies_per_second", &ClientLimits::error_replies_per_second),
+      // Each session is an iceoryx server port and a WaitSet attachment (256 per WaitSet).
+      {"limits.max_shm_sessions",
+       [](ServerConfig& c, const std::string& v) {
+         const std::uint64_t n = parseUnsigned(v, 250);
+         if (n == 0) throw std::invalid_argument("must be at least 1");
+         c.limits.max_shm_sessions = static_cast<std::uint32_t>(n);
+       },
+       [](const ServerConfig& c) { return std::to_string(c.limits.max_shm_sessions); }},
       unsignedSetting("limits.max_models_per_client", &ServiceOptions::max_models_per_client, 1u << 20),
       unsignedSetting("limits.max_functions_per_client", &ServiceOptions::max_functions_per_client, 1u << 20),
       unsignedSetting("build.workers", &ServiceOptions::build_workers, 256),

@@ -48,6 +48,7 @@ struct ClientLimits {
   std::uint32_t max_queued_requests_per_client = 64;   // pending (queued or running); more: RESOURCE_EXHAUSTED
   std::uint32_t max_running_requests_per_client = 2;   // posted requests on the request threads at once
   std::uint32_t error_replies_per_second = 100;        // per client, to malformed / over-quota requests
+  std::uint32_t max_shm_sessions = 64;                 // iceoryx connections (sessions) open at once
 };
 
 struct ServerConfig {

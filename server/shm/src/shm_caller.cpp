@@ -66,6 +66,12 @@ Caller lookUp(std::string_view client_id) {
 
 }  // namespace
 
+bool shmClientProcessGone(std::string_view client_id) {
+  const auto pid = localPid(client_id);
+  struct stat info {};
+  return pid && stat(("/proc/" + std::to_string(*pid)).c_str(), &info) != 0;
+}
+
 Caller callerOfUid(unsigned uid) {
   return Caller{"user:" + userName(uid), uid == 0 || uid == geteuid(), false};
 }

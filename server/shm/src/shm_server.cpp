@@ -1,4 +1,4 @@
-// The iceoryx transport's server: receive thread, fair lanes per client, Evaluate, posted methods.
+// The iceoryx transport's server: sessions, receive thread, fair lanes per session, Evaluate, posted methods.
 #include "robodiff/server/shm_server.hpp"
 
 #include <atomic>
@@ -20,6 +20,7 @@
 #include "robodiff/server/error_budget.hpp"
 #include "robodiff/server/fair_scheduler.hpp"
 #include "robodiff/server/shm_caller.hpp"
+#include "shm_sessions.hpp"
 
 namespace robodiff::server {
 namespace {
@@ -40,7 +41,8 @@ const char* toString(iox::popo::AllocationError error) {
 }
 
 // The iceoryx client port a request came from (the unique id of the client's response
-// queue): the key for fair sharing. iceoryx keeps it protected; a derived type reads it.
+// queue): the key of the shared port's error budget. iceoryx keeps it protected; a
+// derived type reads it.
 struct ClientPortOf : iox::popo::RequestHeader {
   static std::uint64_t key(const iox::popo::RequestHeader& routing) {
     return static_cast<std::uint64_t>(routing.*(&ClientPortOf::m_uniqueClientQueueId));
@@ -51,14 +53,22 @@ struct ClientPortOf : iox::popo::RequestHeader {
 // (moved out of the chunk: a plain copy of the client queue id, queue index and sequence
 // id), the parsed header and a copy of the body (view.body points into it).
 struct TakenRequest {
-  explicit TakenRequest(const iox::popo::RequestHeader& r)
-      : routing(std::move(const_cast<iox::popo::RequestHeader&>(r))) {}
+  TakenRequest(shm_detail::SessionPtr s, const iox::popo::RequestHeader& r)
+      : session(std::move(s)), routing(std::move(const_cast<iox::popo::RequestHeader&>(r))) {}
+  shm_detail::SessionPtr session;  // the port it came on, and the caller
   iox::popo::RequestHeader routing;
   shm::RequestView view;
   std::vector<std::byte> body;
   Clock::time_point received;
 };
 using Taken = std::shared_ptr<TakenRequest>;
+using shm_detail::ShmSession;
+using shm_detail::SessionPtr;
+
+// How long the shared port is not drained once a sender there has spent its error
+// budget: session opens behind its garbage wait at most this long.
+constexpr auto kSharedPortPause = std::chrono::milliseconds(10);
+constexpr auto kSweepInterval = std::chrono::milliseconds(200);  // closing sessions whose client left
 
 }  // namespace
 
@@ -67,9 +77,8 @@ struct ShmServer::Impl {
   ShmServerOptions options;
   Logger& log;
 
-  std::mutex port_mutex;  // the iceoryx server port is not thread-safe
-  std::unique_ptr<iox::popo::UntypedServer> port;
   std::unique_ptr<iox::popo::WaitSet<>> waitset;
+  std::unique_ptr<shm_detail::ShmSessions> sessions;  // the receive thread's
   std::thread receiver;
   std::atomic<bool> running{false};
   std::atomic<bool> accepting{true};
@@ -78,13 +87,17 @@ struct ShmServer::Impl {
   std::condition_variable idle_cv;
   std::size_t in_flight = 0;
 
-  // Fair sharing (fair_scheduler.hpp): lanes per client port; bad requests budgeted.
+  // Fair sharing (fair_scheduler.hpp): lanes per session; bad requests budgeted.
   FairScheduler<Taken> scheduler;
-  ErrorBudget malformed, refused;
+  ErrorBudget malformed, refused;  // per session
+  ErrorBudget shared_port_errors;  // per client port on the shared port
+  Clock::time_point next_sweep{};
+  std::atomic<std::size_t> open_sessions{0};  // for openSessions(), set by the receive thread
 
   Impl(ServiceApi& s, ShmServerOptions o, Logger& l)
       : service(s), options(std::move(o)), log(l), scheduler(options.fair),
-        malformed(options.error_replies_per_second), refused(options.error_replies_per_second) {}
+        malformed(options.error_replies_per_second), refused(options.error_replies_per_second),
+        shared_port_errors(options.error_replies_per_second) {}
 
   void begin() {
     std::lock_guard lock(idle_mutex);
@@ -113,8 +126,8 @@ struct ShmServer::Impl {
 
   // Loans, fills and sends a reply whose body is `body` (dropped unless status is OK).
   // A reply that would not fit becomes RESOURCE_EXHAUSTED. Returns the status sent.
-  Status sendReply(const iox::popo::RequestHeader& routing, const rpc::RequestHeader& request, rpc::Method method,
-                   Status status, std::span<const std::byte> body) {
+  Status sendReply(ShmSession& session, const iox::popo::RequestHeader& routing, const rpc::RequestHeader& request,
+                   rpc::Method method, Status status, std::span<const std::byte> body) {
     if (!status.ok()) body = {};
     std::uint64_t size = shm::chunkSize(shm::wireMessage(status).size(), body.size());
     if (size > options.max_chunk_payload) {
@@ -123,8 +136,9 @@ struct ShmServer::Impl {
       size = shm::chunkSize(shm::wireMessage(status).size(), 0);
     }
     const auto header = replyHeader(request, status);
-    std::lock_guard lock(port_mutex);
-    auto loaned = port->loan(&routing, static_cast<std::uint32_t>(size), shm::kChunkAlignment);
+    std::lock_guard lock(session.mutex);
+    if (!session.port) return status;  // the session closed: its client is gone
+    auto loaned = session.port->loan(&routing, static_cast<std::uint32_t>(size), shm::kChunkAlignment);
     if (loaned.has_error()) {
       log.error("shm_reply_loan_failed", {{"method", rpc::toString(method)}, {"bytes", size},
                                           {"reason", toString(loaned.get_error())}});
@@ -133,26 +147,32 @@ struct ShmServer::Impl {
     void* chunk = loaned.value();
     shm::writeReplyHeader(chunk, header, method, body.size());
     if (!body.empty()) std::memcpy(shm::bodyOf(chunk), body.data(), body.size());
-    if (port->send(chunk).has_error())
+    if (session.port->send(chunk).has_error())
       log.debug("shm_reply_dropped", {{"method", rpc::toString(method)}, {"client_id", request.client_id}});
     return status;
   }
+  Status sendReply(const TakenRequest& r, Status status, std::span<const std::byte> body = {}) {
+    return sendReply(*r.session, r.routing, r.view.header, r.view.method, std::move(status), body);
+  }
 
-  void release(const void* payload) {
-    std::lock_guard lock(port_mutex);
-    port->releaseRequest(payload);
+  void release(ShmSession& session, const void* payload) {
+    std::lock_guard lock(session.mutex);
+    session.port->releaseRequest(payload);
   }
 
   void record(rpc::Method method, StatusCode code, Clock::time_point received) {
     service.recordRequest(kTransport, method, code, Clock::now() - received);
   }
 
-  // ---- the receive thread: drain iceoryx into the lanes, serve one per client in turn --
+  // ---- the receive thread: drain every port a few chunks at a time, serve in turn -----
 
   void receiveLoop() {
     const auto poll = std::chrono::duration_cast<Clock::duration>(options.poll_after_request);
     while (running.load()) {
-      waitset->wait();  // woken by a request, or by markForDestruction() in stop()
+      const auto due = housekeeping();
+      const auto wait = std::chrono::duration_cast<std::chrono::microseconds>(due - Clock::now()).count();
+      // Woken by a request, by markForDestruction() in stop(), or when a pause or a sweep is due.
+      waitset->timedWait(iox::units::Duration::fromMicroseconds(std::max<std::int64_t>(wait, 0)));
       pump();
       // A client's next request often follows its reply within microseconds: poll a
       // little before sleeping again, which saves the WaitSet wake-up.
@@ -163,127 +183,202 @@ struct ShmServer::Impl {
     }
   }
 
-  // Until the lanes are empty: take what iceoryx holds, then serve the next client's
-  // request. Draining between turns keeps iceoryx's shared request queue short (a full
-  // one discards its oldest request, whoever sent it). True when anything happened.
+  // Resumes paused ports, closes sessions whose client left; returns when next due.
+  Clock::time_point housekeeping() {
+    const auto now = Clock::now();
+    if (now >= next_sweep) {
+      if (const std::size_t closed = sessions->sweep(now); closed > 0)
+        log.info("shm_sessions_closed", {{"closed", static_cast<std::uint64_t>(closed)},
+                                         {"open", static_cast<std::uint64_t>(sessions->openSessions())}});
+      next_sweep = now + kSweepInterval;
+      open_sessions = sessions->openSessions();
+    }
+    return std::min(sessions->resumeDue(now), next_sweep);
+  }
+
+  // Until nothing is left: take up to requests_per_turn chunks from every port not
+  // paused, then serve one request of every session with one waiting (one round).
+  // True when anything happened.
   bool pump() {
     bool any = false;
     while (running.load()) {
-      any |= drain();
-      auto next = scheduler.next();
-      if (!next) break;
-      serve(next->client, std::move(next->item));
+      bool moved = drainAll();
+      for (std::size_t round = scheduler.waitingClients(); round > 0; --round) {
+        auto next = scheduler.next();
+        if (!next) break;
+        serve(next->client, std::move(next->item));
+        moved = true;
+      }
+      if (!moved) break;
       any = true;
     }
     return any;
   }
 
-  // Takes up to a queue's worth of waiting requests into the lanes. iceoryx's request
-  // queue (overflowing: a full one drops its oldest) fails a take now and then while a
-  // client is overflowing it: retry while it says it holds requests, a bounded number of
-  // times, so that a flooding client never makes the queue look empty.
-  bool drain() {
+  bool drainAll() {
+    bool taken = false;
+    const auto& all = sessions->all();
+    for (std::size_t i = 0; i < all.size(); ++i) {  // by index: a session open appends
+      const SessionPtr session = all[i];
+      if (!session->attached) continue;  // paused
+      taken |= drain(session, session->shared() ? options.request_queue_capacity : options.requests_per_turn);
+    }
+    return taken;
+  }
+
+  // Takes up to `most` waiting requests of one port (fewer when it gets paused).
+  bool drain(const SessionPtr& session, std::uint64_t most) {
     std::uint64_t taken = 0;
-    for (int retries = 0; taken < options.request_queue_capacity;) {
+    while (taken < most && session->attached) {
       const void* payload = nullptr;
       {
-        std::lock_guard lock(port_mutex);
-        auto t = port->take();
-        if (t.has_error()) {
-          if (t.get_error() == iox::popo::ServerRequestResult::NO_PENDING_REQUESTS && port->hasRequests() &&
-              ++retries < kTakeRetries)
-            continue;
-          break;
-        }
+        std::lock_guard lock(session->mutex);
+        auto t = session->port->take();
+        if (t.has_error()) break;
         payload = t.value();
       }
-      intake(payload);
+      if (session->shared()) intakeShared(*session, payload);
+      else intake(session, payload);
       ++taken;
     }
     return taken > 0;
   }
-  static constexpr int kTakeRetries = 256;
 
-  // One request chunk: checked, refused or copied into its client's lane; always released.
-  void intake(const void* payload) {
+  // A chunk on the shared port: a session open, else refused (a request of a client
+  // library without sessions: FAILED_PRECONDITION; garbage: INVALID_ARGUMENT) within the
+  // sender's error budget. A sender past it pauses the shared port briefly.
+  void intakeShared(ShmSession& shared, const void* payload) {
     const auto received = Clock::now();
     const auto& routing = *iox::popo::RequestHeader::fromPayload(payload);
-    const std::uint64_t client = ClientPortOf::key(routing);
+    shm::RequestView view;
+    if (shm::parseSessionOpen(payload, payloadSize(payload), view).ok()) {
+      openSession(shared, routing, view);
+      return release(shared, payload);
+    }
+    Status s = shm::parseRequest(payload, payloadSize(payload), view);
+    if (s.ok())
+      s = {StatusCode::FailedPrecondition,
+           "robodiffd serves iceoryx requests on a session per connection: this port (robodiff/" + options.service +
+               "/rpc) only opens sessions; the client library is older than the server, update it"};
+    const auto d = shared_port_errors.note(ClientPortOf::key(routing), received);
+    if (d.log)
+      log.warn("shm_bad_requests", {{"client_port", ClientPortOf::key(routing)}, {"count", d.count},
+                                    {"dropped_unanswered", d.dropped}, {"port", "rpc"}, {"message", s.message}});
+    if (d.reply) {
+      sendReply(shared, routing, view.header, view.method, s, {});
+      record(view.method, s.code, received);
+    } else {
+      sessions->pause(shared, received + kSharedPortPause);
+    }
+    release(shared, payload);
+  }
+
+  void openSession(ShmSession& shared, const iox::popo::RequestHeader& routing, const shm::RequestView& view) {
+    SessionPtr session;
+    if (sessions->openSessions() >= sessions->limits().max_sessions) sessions->sweep(Clock::now());  // any gone?
+    Status s = accepting.load() ? sessions->open(view.header.client_id,
+                                                 shm_detail::callerOfShmClient(view.header.client_id), session)
+                                : Status{StatusCode::Unavailable, "the server is draining (shutting down)"};
+    open_sessions = sessions->openSessions();
+    if (s.ok())
+      log.debug("shm_session_opened", {{"event", session->event}, {"client_id", view.header.client_id},
+                                       {"caller", session->caller.name}});
+    else
+      log.warn("shm_session_refused", {{"client_id", view.header.client_id}, {"message", s.message}});
+    rpc::ReplyHeader header = replyHeader(view.header, s);
+    const std::string_view event = s.ok() ? std::string_view(session->event) : std::string_view();
+    const std::uint64_t size = shm::chunkSize(shm::wireMessage(s).size(), event.size());
+    std::lock_guard lock(shared.mutex);
+    auto loaned = shared.port->loan(&routing, static_cast<std::uint32_t>(size), shm::kChunkAlignment);
+    if (loaned.has_error()) return;  // the client times out; its session closes unused
+    shm::writeSessionReply(loaned.value(), header, event);
+    if (shared.port->send(loaned.value()).has_error()) log.debug("shm_session_reply_dropped", {{"client_id", view.header.client_id}});
+  }
+
+  // One request chunk of a session: checked, refused or copied into the session's lane;
+  // always released. A session past its error budget is paused for the rest of its window.
+  void intake(const SessionPtr& session, const void* payload) {
+    const auto received = Clock::now();
+    const auto& routing = *iox::popo::RequestHeader::fromPayload(payload);
+    const std::uint64_t client = session->key;
+    session->had_client = true;  // (a client that sends and leaves between two sweeps)
     shm::RequestView view;
     if (Status s = shm::parseRequest(payload, payloadSize(payload), view); !s.ok()) {
       const auto d = malformed.note(client, received);
       if (d.log)
-        log.warn("shm_bad_requests", {{"client_port", client}, {"count", d.count}, {"dropped_unanswered", d.dropped},
-                                      {"message", s.message}});
+        log.warn("shm_bad_requests", {{"session", session->event}, {"client_id", session->client_id}, {"count", d.count},
+                                      {"dropped_unanswered", d.dropped}, {"message", s.message}});
       if (d.reply) {
-        sendReply(routing, view.header, view.method, s, {});
+        sendReply(*session, routing, view.header, view.method, s, {});
         record(view.method, s.code, received);
+      } else {
+        sessions->pause(*session, d.window_end);
       }
-      release(payload);
-      return;
+      return release(*session, payload);
     }
     if (!accepting.load()) {
       Status s{StatusCode::Unavailable, "the server is draining (shutting down); retry on another server"};
-      return refuse(payload, routing, view, std::move(s), received);
+      return refuse(*session, payload, routing, view, std::move(s), received);
     }
     if (Status s = service.admit(view.header); !s.ok()) {
       const bool other_server = s.code == StatusCode::NotFound && !view.header.server_instance_id.empty() &&
                                 view.header.server_instance_id != service.instanceId();
-      if (!other_server) return refuse(payload, routing, view, std::move(s), received);
-      release(payload);  // not ours to answer
-      return;
+      if (!other_server) return refuse(*session, payload, routing, view, std::move(s), received);
+      return release(*session, payload);  // not ours to answer
     }
-    auto taken = std::make_shared<TakenRequest>(routing);
+    auto taken = std::make_shared<TakenRequest>(session, routing);
     taken->view = std::move(view);
     taken->body.assign(taken->view.body.begin(), taken->view.body.end());
     taken->view.body = taken->body;
     taken->received = received;
-    release(payload);
+    release(*session, payload);
     if (scheduler.push(client, taken)) begin();  // in flight until answered (waitIdle)
     else overQuota(client, *taken);
   }
 
-  void refuse(const void* payload, const iox::popo::RequestHeader& routing, const shm::RequestView& view, Status s,
-              Clock::time_point received) {
-    sendReply(routing, view.header, view.method, s, {});
-    release(payload);
+  void refuse(ShmSession& session, const void* payload, const iox::popo::RequestHeader& routing,
+              const shm::RequestView& view, Status s, Clock::time_point received) {
+    sendReply(session, routing, view.header, view.method, s, {});
+    release(session, payload);
     record(view.method, s.code, received);
   }
 
-  // A client with max_queued requests pending: RESOURCE_EXHAUSTED, within its error budget.
+  // A client with max_queued requests pending: RESOURCE_EXHAUSTED, within its error
+  // budget; past it, its session is paused for the rest of the budget's window.
   void overQuota(std::uint64_t client, const TakenRequest& r) {
     const auto d = refused.note(client, r.received);
     const std::uint32_t quota = scheduler.limits().max_queued;
     if (d.log)
-      log.warn("shm_client_over_queue_quota", {{"client_port", client}, {"client_id", r.view.header.client_id},
+      log.warn("shm_client_over_queue_quota", {{"session", r.session->event}, {"client_id", r.view.header.client_id},
                                                {"count", d.count}, {"dropped_unanswered", d.dropped},
                                                {"max_queued_requests_per_client", quota}});
-    if (!d.reply) return;
+    if (!d.reply) return sessions->pause(*r.session, d.window_end);
     Status s{StatusCode::ResourceExhausted,
              "this client has " + std::to_string(quota) +
                  " requests pending, the most one client may have (limits.max_queued_requests_per_client = " +
                  std::to_string(quota) + "); wait for replies before sending more"};
-    sendReply(r.routing, r.view.header, r.view.method, s, {});
+    sendReply(r, s);
     record(r.view.method, s.code, r.received);
   }
 
   // The next request in turn: Evaluate here, the others on the request threads.
   void serve(std::uint64_t client, Taken taken) {
     if (taken->view.method != rpc::Method::Evaluate) return post(client, std::move(taken));
-    const Status s = evaluate(taken->routing, taken->view, taken->received);
+    const Status s = evaluate(*taken);
     scheduler.served(client);
     record(taken->view.method, s.code, taken->received);
     end();
   }
 
   // Evaluate / EvaluateBatch: request body -> response chunk.
-  Status evaluate(const iox::popo::RequestHeader& routing, const shm::RequestView& view,
-                  Clock::time_point received) {
+  Status evaluate(const TakenRequest& r) {
+    const shm::RequestView& view = r.view;
+    ShmSession& session = *r.session;
     const bool batch = view.method == rpc::Method::EvaluateBatch;
-    auto fail = [&](Status s) { return sendReply(routing, view.header, view.method, std::move(s), {}); };
+    auto fail = [&](Status s) { return sendReply(r, std::move(s)); };
     shm::EvaluateRequestView request;
     if (Status s = shm::decodeEvaluateRequest(view.body, request); !s.ok()) return fail(std::move(s));
-    const auto ctx = CallContext::from(view.header, kTransport, received);
+    const auto ctx = CallContext::from(view.header, kTransport, r.received);
     if (ctx.expired()) return fail({StatusCode::DeadlineExceeded, "the deadline passed before evaluation started"});
     FunctionShape shape;
     if (Status s = service.shape(request.function_id, shape); !s.ok()) return fail(std::move(s));
@@ -308,8 +403,9 @@ struct ShmServer::Impl {
     }
     void* chunk = nullptr;
     {
-      std::lock_guard lock(port_mutex);
-      auto loaned = port->loan(&routing, static_cast<std::uint32_t>(size), shm::kChunkAlignment);
+      std::lock_guard lock(session.mutex);
+      if (!session.port) return {StatusCode::Cancelled, "the session closed"};
+      auto loaned = session.port->loan(&r.routing, static_cast<std::uint32_t>(size), shm::kChunkAlignment);
       if (loaned.has_error()) {
         const char* reason = toString(loaned.get_error());
         log.error("shm_reply_loan_failed", {{"method", rpc::toString(view.method)}, {"bytes", size}, {"reason", reason}});
@@ -326,13 +422,13 @@ struct ShmServer::Impl {
                            : service.evaluate(ctx, request.function_id, request.inputs, outputs);
     if (!s.ok()) {
       {
-        std::lock_guard lock(port_mutex);
-        port->releaseResponse(chunk);
+        std::lock_guard lock(session.mutex);
+        if (session.port) session.port->releaseResponse(chunk);
       }
       return fail(s);
     }
-    std::lock_guard lock(port_mutex);
-    if (port->send(chunk).has_error())
+    std::lock_guard lock(session.mutex);
+    if (!session.port || session.port->send(chunk).has_error())
       log.debug("shm_reply_dropped", {{"method", rpc::toString(view.method)}, {"client_id", view.header.client_id}});
     return s;
   }
@@ -354,7 +450,7 @@ struct ShmServer::Impl {
     if (queued) return;
     Status busy{StatusCode::ResourceExhausted, std::string("the server's request queue is full; ") +
                                                    rpc::toString(taken->view.method) + " refused, retry later"};
-    sendReply(taken->routing, taken->view.header, taken->view.method, busy, {});
+    sendReply(*taken, busy);
     record(taken->view.method, busy.code, taken->received);
     finished(client);
   }
@@ -375,17 +471,16 @@ struct ShmServer::Impl {
     if (s.ok()) s = (service.*method)(ctx, request, reply);
     std::vector<std::byte> body;
     if (s.ok()) body = shm::encode(reply);
-    return sendReply(r.routing, r.view.header, r.view.method, std::move(s), body);
+    return sendReply(r, std::move(s), body);
   }
 
   // Runs a posted method on a request thread and sends its reply.
   Status runPosted(const TakenRequest& r) {
-    if (r.view.method == rpc::Method::EvaluateBatch) return evaluate(r.routing, r.view, r.received);
+    if (r.view.method == rpc::Method::EvaluateBatch) return evaluate(r);
     auto ctx = CallContext::from(r.view.header, kTransport, r.received);
-    ctx.caller = shm_detail::callerOfShmClient(r.view.header.client_id);  // shm_caller.hpp
+    ctx.caller = r.session->caller;  // fixed when the session opened (shm_caller.hpp)
     if (ctx.expired())
-      return sendReply(r.routing, r.view.header, r.view.method,
-                       {StatusCode::DeadlineExceeded, "the deadline passed while the request was queued"}, {});
+      return sendReply(r, {StatusCode::DeadlineExceeded, "the deadline passed while the request was queued"});
     switch (r.view.method) {
       case rpc::Method::LoadModel: return call(r, ctx, &ServiceApi::loadModel);
       case rpc::Method::GetFunction: return call(r, ctx, &ServiceApi::getFunction);
@@ -397,8 +492,7 @@ struct ShmServer::Impl {
       case rpc::Method::CancelJob: return call(r, ctx, &ServiceApi::cancelJob);
       case rpc::Method::JobResult: return call(r, ctx, &ServiceApi::jobResult);
       default:
-        return sendReply(r.routing, r.view.header, r.view.method,
-                         {StatusCode::Unimplemented, "method not served by posting"}, {});
+        return sendReply(r, {StatusCode::Unimplemented, "method not served by posting"});
     }
   }
 };
@@ -439,15 +533,6 @@ Status ShmServer::start() {
     return {StatusCode::InvalidArgument, "iceoryx service name '" + d.options.service + "' must have 1 to " +
                                              std::to_string(iox::capro::IdString_t::capacity()) + " characters"};
   if (Status s = shm::ensureRuntime("robodiffd"); !s.ok()) return s;
-  iox::popo::ServerOptions server_options;
-  server_options.requestQueueCapacity =
-      std::clamp<std::uint64_t>(d.options.request_queue_capacity, 1, iox::MAX_REQUEST_QUEUE_CAPACITY);
-  // A full request queue makes the sender wait instead of dropping the oldest request,
-  // which would let a flooding client push every other client's requests out. iceoryx
-  // connects only clients that agree to wait (ClientOptions::serverTooSlowPolicy =
-  // WAIT_FOR_CONSUMER); the receive thread drains the queue at once, so a sender waits
-  // only while a flooder is filling it.
-  server_options.requestQueueFullPolicy = iox::popo::QueueFullPolicy::BLOCK_PRODUCER;
   const iox::capro::ServiceDescription description(
       "robodiff", iox::capro::IdString_t(iox::cxx::TruncateToCapacity, d.options.service.c_str()), "rpc");
   // RouDi allows one server per service and aborts a process asking for a second one.
@@ -458,18 +543,19 @@ Status ShmServer::start() {
             "iceoryx service 'robodiff/" + d.options.service +
                 "/rpc' is already offered on this host (another robodiffd is running, or a crashed one "
                 "has not been cleaned up by RouDi); stop it or choose another name with iceoryx.service"};
-  d.port = std::make_unique<iox::popo::UntypedServer>(description, server_options);
   d.waitset = std::make_unique<iox::popo::WaitSet<>>();
-  if (d.waitset->attachState(*d.port, iox::popo::ServerState::HAS_REQUEST).has_error()) {
+  d.sessions = std::make_unique<shm_detail::ShmSessions>(d.options.service, d.options.sessions, *d.waitset);
+  if (!d.sessions->openShared(d.options.request_queue_capacity)) {
+    d.sessions.reset();
     d.waitset.reset();
-    d.port.reset();
     return {StatusCode::Internal, "could not attach the iceoryx server to a WaitSet"};
   }
   d.accepting = true;
   d.running = true;
   d.receiver = std::thread([&d] { d.receiveLoop(); });
   d.log.info("shm_server_started", {{"service", "robodiff/" + d.options.service + "/rpc"},
-                                    {"max_chunk_payload", d.options.max_chunk_payload}});
+                                    {"max_chunk_payload", d.options.max_chunk_payload},
+                                    {"max_sessions", d.options.sessions.max_sessions}});
   return {};
 }
 
@@ -497,9 +583,10 @@ void ShmServer::stop() {
     while (!d.idle_cv.wait_for(lock, std::chrono::seconds(5), [&] { return d.in_flight == 0; }))
       d.log.warn("shm_server_stop_waiting", {{"in_flight", static_cast<std::uint64_t>(d.in_flight)}});
   }
-  std::lock_guard lock(d.port_mutex);
+  d.sessions->closeAll();
+  d.sessions.reset();
+  d.open_sessions = 0;
   d.waitset.reset();
-  d.port.reset();
   d.log.info("shm_server_stopped", {{"service", "robodiff/" + d.options.service + "/rpc"}});
 }
 
@@ -509,5 +596,7 @@ std::size_t ShmServer::inFlight() const {
 }
 
 bool ShmServer::running() const { return impl_->running.load(); }
+
+std::size_t ShmServer::openSessions() const { return impl_->open_sessions.load(); }
 
 }  // namespace robodiff::server

@@ -1,6 +1,11 @@
 #pragma once
 // The iceoryx transport's client: requests are written straight into loaned shared-memory
-// chunks (shm_codec.hpp) and sent to the iceoryx service ("robodiff", service, "rpc").
+// chunks (shm_codec.hpp) and sent to this connection's session on the server. connectShm
+// (or the first call, when the server came later or restarted) opens the session on the
+// shared service ("robodiff", service, "rpc"), which answers with the session's own
+// service ("robodiff", service, "rpc.<n>.<random>"): a request queue for this connection
+// alone, so another client flooding its queue never delays ours (docs/limits.md, "Fair
+// sharing"). Closing the connection disconnects the session's port; the server closes it.
 //
 // Thread-safe: one iceoryx client port guarded by a mutex, and a receive thread that
 // hands each response chunk to the call waiting for its correlation id (the request's
@@ -10,7 +15,8 @@
 // at once (iceoryx's limit of loaned requests); more callers wait their turn.
 //
 // Statuses made here: UNAVAILABLE (no RouDi, no server offering the service, or the
-// server went away mid-call; the connection recovers by itself when a server returns),
+// server went away mid-call; the connection opens a new session by itself when a server
+// returns), RESOURCE_EXHAUSTED from the server at open (limits.max_shm_sessions reached),
 // DEADLINE_EXCEEDED (no reply within the call's timeout), RESOURCE_EXHAUSTED (a request
 // larger than the shared-memory limit: nothing is sent).
 

@@ -37,7 +37,9 @@ inline constexpr std::size_t kIdCapacity = 64;            // client / server ids
 inline constexpr std::size_t kMaxStatusMessage = 4096;    // longer messages are cut
 inline constexpr std::size_t kChunkAlignment = 8;
 
-enum class ChunkKind : std::uint16_t { Request = 1, Reply = 2 };
+// SessionOpen / SessionReply: the handshake on the shared port ("robodiff", service, "rpc")
+// that gives a connection its own request queue (server/shm: sessions; docs/transports.md).
+enum class ChunkKind : std::uint16_t { Request = 1, Reply = 2, SessionOpen = 3, SessionReply = 4 };
 
 struct ChunkHeader {
   std::uint32_t magic;
@@ -124,6 +126,18 @@ struct ReplyView {
 // Validates magic, kind, method, id termination and lengths against chunk_size.
 Status parseRequest(const void* chunk, std::size_t chunk_size, RequestView& view);
 Status parseReply(const void* chunk, std::size_t chunk_size, ReplyView& view);
+
+// ---- sessions -----------------------------------------------------------------------------
+// A session open is a request header of kind SessionOpen with method Health and no body
+// (chunkSize(0, 0) bytes); its reply one of kind SessionReply whose body, when the status
+// is OK, is the iceoryx event of the session's own service ("robodiff", service, event).
+inline constexpr std::size_t kSessionEventCapacity = 100;  // iceoryx's IdString_t
+void writeSessionOpen(void* chunk, const rpc::RequestHeader& header);
+// A reply of chunkSize(wireMessage(header.status).size(), event.size()) bytes.
+void writeSessionReply(void* chunk, const rpc::ReplyHeader& header, std::string_view event);
+Status parseSessionOpen(const void* chunk, std::size_t chunk_size, RequestView& view);
+// view.body is the event (empty unless the status is OK).
+Status parseSessionReply(const void* chunk, std::size_t chunk_size, ReplyView& view);
 
 struct EvaluateRequestView {
   std::string_view function_id;

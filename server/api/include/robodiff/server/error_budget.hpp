@@ -1,7 +1,8 @@
 #pragma once
 // What a client's bad requests may cost (issue 19, item 5): malformed requests, or
 // requests over the client's queue quota, get at most `replies_per_second` error replies
-// per client per second; the rest are dropped without a reply. The log gets at most one
+// per client per second; the rest are dropped without a reply (and the iceoryx
+// transport stops taking the client's requests until window_end). The log gets at most one
 // line per client per second, with the count since the last one. A transport's receive
 // thread owns its budgets (no lock).
 
@@ -23,6 +24,7 @@ class ErrorBudget {
     bool log = false;            // log one summary line now, with the counts below
     std::uint64_t count = 0;     // bad requests of this client since its last log line
     std::uint64_t dropped = 0;   // of those, dropped without a reply
+    Clock::time_point window_end{};  // when the client's budget is refilled
   };
 
   // Counts one bad request of `client`.
@@ -34,6 +36,7 @@ class ErrorBudget {
       e.replies = 0;
     }
     Decision d;
+    d.window_end = e.window_start + std::chrono::seconds(1);
     d.reply = e.replies < replies_per_second_;
     if (d.reply) ++e.replies;
     else ++e.dropped;

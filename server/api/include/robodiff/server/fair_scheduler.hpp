@@ -91,6 +91,8 @@ class FairScheduler {
     return std::nullopt;
   }
   bool empty() const { return queued_ == 0; }
+  // Clients with a request queued: one round of next().
+  std::size_t waitingClients() const { return rotation_.size(); }
   std::size_t queued() const { return queued_; }
 
   // A request next() returned was answered on the receive thread (or refused).

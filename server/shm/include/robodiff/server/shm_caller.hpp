@@ -16,6 +16,10 @@ namespace robodiff::server::shm_detail {
 // Cached per client id. Safe from any thread.
 Caller callerOfShmClient(std::string_view client_id);
 
+// Whether the process a client id names ("<host>:<pid>:<random>" on this host) is gone.
+// False when the id names no local process (nothing to tell).
+bool shmClientProcessGone(std::string_view client_id);
+
 // What callerOfShmClient uses: the caller of a uid.
 Caller callerOfUid(unsigned uid);
 
