@@ -175,6 +175,7 @@ const std::vector<Setting>& settings() {
       unsignedSetting("service.request_threads", &ServiceOptions::request_threads, 256),
       unsignedSetting("service.request_queue", &ServiceOptions::request_queue_capacity, 1u << 20),
       unsignedSetting("service.batch_threads", &ServiceOptions::batch_threads, 256),
+      unsignedSetting("service.background_nice", &ServiceOptions::background_nice, 19),
       unsignedSetting("service.max_batch_knots", &ServiceOptions::max_batch_knots, 100'000'000),
       unsignedSetting("service.max_models", &ServiceOptions::max_models, 1u << 20),
       unsignedSetting("service.max_functions", &ServiceOptions::max_functions, 1u << 20),

@@ -2,13 +2,19 @@
 
 #include <algorithm>
 
+#include "thread_priority.hpp"
+
 namespace robodiff::server::detail {
 
-BatchRunner::BatchRunner(unsigned threads) {
+BatchRunner::BatchRunner(unsigned threads, unsigned nice) {
   const unsigned helpers = std::max(1u, threads) - 1;
   invited_.reserve(64);
   helpers_.reserve(helpers);
-  for (unsigned i = 0; i < helpers; ++i) helpers_.emplace_back([this] { loop(); });
+  for (unsigned i = 0; i < helpers; ++i)
+    helpers_.emplace_back([this, nice] {
+      lowerCallingThreadPriority(nice);
+      loop();
+    });
 }
 
 BatchRunner::~BatchRunner() {

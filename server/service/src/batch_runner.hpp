@@ -16,8 +16,9 @@ namespace robodiff::server::detail {
 
 class BatchRunner {
  public:
-  // `threads` is the parallelism including the caller: threads - 1 helpers are started.
-  explicit BatchRunner(unsigned threads);
+  // `threads` is the parallelism including the caller: threads - 1 helpers are started,
+  // each `nice` nicer than the thread that made the runner (thread_priority.hpp).
+  explicit BatchRunner(unsigned threads, unsigned nice = 0);
   ~BatchRunner();
   BatchRunner(const BatchRunner&) = delete;
   BatchRunner& operator=(const BatchRunner&) = delete;

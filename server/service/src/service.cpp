@@ -130,11 +130,11 @@ Service::State::State(ServiceOptions o, Logger& l)
       pool(poolOptions(options)),
       builds(buildSettings(options), cache, pool, l,
              [this](const std::shared_ptr<detail::FunctionEntry>& f) { unloadFailed(f); }),
-      batch(batchThreads(options)),
-      requests("request", std::max(1u, options.request_threads),
-               std::max<std::size_t>(1, options.request_queue_capacity), [this](const std::string& what) {
-                 log.error("internal_error", {{"message", what}});
-               }) {
+      batch(batchThreads(options), options.background_nice),
+      requests(
+          "request", std::max(1u, options.request_threads), std::max<std::size_t>(1, options.request_queue_capacity),
+          [this](const std::string& what) { log.error("internal_error", {{"message", what}}); },
+          options.background_nice) {
   if (options.job_workers > 0) {
     JobManagerOptions j;
     j.cache_dir = cache.dir();

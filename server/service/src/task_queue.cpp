@@ -3,13 +3,19 @@
 #include <algorithm>
 #include <exception>
 
+#include "thread_priority.hpp"
+
 namespace robodiff::server::detail {
 
-TaskQueue::TaskQueue(std::string name, unsigned threads, std::size_t capacity, ErrorHandler on_error)
+TaskQueue::TaskQueue(std::string name, unsigned threads, std::size_t capacity, ErrorHandler on_error, unsigned nice)
     : name_(std::move(name)), capacity_(capacity), on_error_(std::move(on_error)) {
   const unsigned n = std::max(1u, threads);
   threads_.reserve(n);
-  for (unsigned i = 0; i < n; ++i) threads_.emplace_back([this] { loop(); });
+  for (unsigned i = 0; i < n; ++i)
+    threads_.emplace_back([this, nice] {
+      lowerCallingThreadPriority(nice);
+      loop();
+    });
 }
 
 TaskQueue::~TaskQueue() { stop(); }

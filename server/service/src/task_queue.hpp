@@ -20,8 +20,10 @@ class TaskQueue {
   using Task = std::function<void()>;
   using ErrorHandler = std::function<void(const std::string& what)>;
 
-  // `capacity` tasks may wait (0: no bound); `threads` run them (at least 1).
-  TaskQueue(std::string name, unsigned threads, std::size_t capacity, ErrorHandler on_error = {});
+  // `capacity` tasks may wait (0: no bound); `threads` run them (at least 1), each
+  // `nice` nicer than the thread that made the queue (thread_priority.hpp).
+  TaskQueue(std::string name, unsigned threads, std::size_t capacity, ErrorHandler on_error = {},
+            unsigned nice = 0);
   ~TaskQueue();  // stop(): runs what is queued, then joins
   TaskQueue(const TaskQueue&) = delete;
   TaskQueue& operator=(const TaskQueue&) = delete;

@@ -33,6 +33,10 @@ struct ServiceOptions {
   unsigned request_threads = 2;              // run posted requests (LoadModel, GetFunction, ...)
   std::size_t request_queue_capacity = 256;  // posted requests waiting; beyond: RESOURCE_EXHAUSTED
   unsigned batch_threads = 0;                // EvaluateBatch pieces in parallel; 0: the cores
+  // Request and batch threads run this much nicer (Linux nice, per thread) than the
+  // transports' receive threads, which serve Evaluate inline: a client flooding expensive
+  // requests then cannot take the CPU from the others' Evaluate calls (docs/limits.md).
+  unsigned background_nice = 10;
   std::uint32_t max_batch_knots = 100000;    // beyond: RESOURCE_EXHAUSTED
   std::size_t max_models = 64;               // beyond: RESOURCE_EXHAUSTED
   std::size_t max_functions = 1024;          // loaded or being built; failed ones are unloaded
