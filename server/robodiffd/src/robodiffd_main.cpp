@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -211,21 +212,179 @@ void addReadinessChecks(Probes& probes, const ServerConfig& config, const Servic
   probes.addReadinessCheck("cache", [cache_dir] { return checkDirectoryWritable(cache_dir, kCacheMinFreeBytes); });
 }
 
-}  // namespace
+// A submitted job's kind and parameters are checked before it is queued.
+robodiff::Status validateJob(const std::string& kind, const std::string& params_json,
+                             const std::vector<std::filesystem::path>& readable_dirs) {
+  try {
+    robodiff::batch::validateBatchJob(kind, nlohmann::json::parse(params_json),
+                                      robodiff::batch::FileAccess::under(readable_dirs));
+    return {};
+  } catch (const std::exception& e) {
+    return {robodiff::StatusCode::InvalidArgument, "SubmitJob " + kind + ": " + robodiff::language::jsonProblem(e.what())};
+  }
+}
 
-int main(int argc, char** argv) {
-  const sigset_t stop_signals = blockStopSignals();
+// The running daemon: the service, its transports and the operators' HTTP endpoints,
+// started in that order and stopped in the reverse one.
+class Daemon {
+ public:
+  Daemon(ServerConfig& config, Logger& log, robodiff::dds_codec::DdsSecurity dds_security)
+      : config_(config), log_(log), dds_security_(std::move(dds_security)), service_(withJobValidation(config), log) {}
 
+  void start() {
+    if (config_.shm.enabled) startShm();
+    if (config_.dds.enabled) startDds();
+    if (config_.http.enabled) startHttp();
+    service_.markServing();
+  }
+
+  const Service& service() const { return service_; }
+  bool iceoryxLost() const { return iceoryx_lost_; }
+
+  // Drains after `sig` (new requests get UNAVAILABLE, those in flight are answered) and
+  // stops; returns the exit code. Exits 4 at once when RouDi no longer knows this process.
+  int drainAndStop(int sig, double drain_timeout_s) {
+    log_.info("draining", {{"signal", signalName(sig)}, {"iceoryx_lost", iceoryx_lost_.load()}});
+    service_.beginDrain();
+    if (shm_) shm_->stopAccepting();
+    if (dds_) dds_->stopAccepting();
+    const auto drain_timeout = std::chrono::milliseconds(static_cast<long long>(drain_timeout_s * 1000));
+    armShutdownWatchdog(drain_timeout + kShutdownGrace, 3);
+    const bool idle = waitIdle(std::chrono::steady_clock::now() + drain_timeout);
+    if (!idle) log_.warn("drain_timeout", {{"seconds", drain_timeout_s}});
+    if (http_) http_->stop();  // its checks read the transports and the service
+    if (dds_) dds_->stop();
+    if (iceoryx_lost_) {  // its ports' memory is RouDi's again: touching them would abort
+      shm_.release();
+      log_.info("stopped", {{"clean", idle}, {"exit_code", 4}});
+      std::fflush(nullptr);
+      std::_Exit(4);  // no static destructors: the iceoryx runtime's would touch them too
+    }
+    if (shm_) shm_->stop();
+    dds_.reset();
+    shm_.reset();
+    log_.info("stopped", {{"clean", idle}});
+    return idle ? 0 : 3;
+  }
+
+ private:
+  static ServiceOptions withJobValidation(const ServerConfig& config) {
+    ServiceOptions options = config.service;
+    options.validate_job = validateJob;
+    return options;
+  }
+
+  void startShm() {
+    // A RouDi started here must outlive this process's iceoryx runtime, which unregisters
+    // from it at exit (a static destroyed then): a static made before the runtime is
+    // destroyed after it.
+    static std::unique_ptr<RoudiHandle> roudi;
+    roudi = ensureRoudi(parseRoudiMode(config_.shm.roudi), log_);
+    ShmServerOptions options;
+    options.service = config_.shm.service;
+    options.fair = {config_.limits.max_queued_requests_per_client, config_.limits.max_running_requests_per_client};
+    options.error_replies_per_second = config_.limits.error_replies_per_second;
+    options.sessions.max_sessions = config_.limits.max_shm_sessions;
+    shm_ = std::make_unique<ShmServer>(service_, options, log_);
+    if (const robodiff::Status started = shm_->start(); !started.ok())
+      throw std::runtime_error("iceoryx: " + started.message);
+    // Paused past RouDi's keep-alive timeout, or RouDi replaced: the iceoryx runtime is lost
+    // either way; the usual drain follows (the main thread's sigwait takes SIGTERM).
+    auto lose_iceoryx = [this](const std::string& reason) {
+      if (iceoryx_lost_.exchange(true)) return;
+      log_.error("iceoryx_lost", {{"reason", reason},
+                                  {"message", "RouDi no longer knows robodiffd; draining the other transports and "
+                                              "exiting with 4 for the supervisor to restart it"}});
+      ::kill(::getpid(), SIGTERM);
+    };
+    pause_monitor_ = std::make_unique<PauseMonitor>(kRoudiDropPause, [lose_iceoryx](double seconds) {
+      lose_iceoryx("paused for " + std::to_string(seconds) + " s, past RouDi's keep-alive timeout");
+    });
+    roudi_watch_ = std::make_unique<RoudiWatch>(lose_iceoryx);
+  }
+
+  void startDds() {
+    DdsServerOptions options;
+    if (config_.dds.domain >= 0) options.domain_id = static_cast<std::uint32_t>(config_.dds.domain);
+    options.service_name = config_.dds.service;
+    options.max_sample_bytes = config_.dds.max_sample_bytes;
+    options.security = dds_security_;
+    options.fair = {config_.limits.max_queued_requests_per_client, config_.limits.max_running_requests_per_client};
+    options.error_replies_per_second = config_.limits.error_replies_per_second;
+    dds_ = std::make_unique<DdsServer>(service_, options, log_);
+    dds_->start();
+    confineDdsSockets(log_);
+  }
+
+  // Operators' HTTP endpoints; not fatal when they cannot listen (the transports are the
+  // service; a probe that cannot connect shows the problem).
+  void startHttp() {
+    probes_.setLivenessNote([this] {
+      return service_.state() == robodiff::rpc::ServingState::Draining ? std::string("draining") : std::string();
+    });
+    const std::filesystem::path cache_dir =
+        config_.service.cache_dir.empty() ? robodiff::cache::defaultCacheDir() : config_.service.cache_dir;
+    addReadinessChecks(probes_, config_, service_, dds_.get(), cache_dir, iceoryx_lost_);
+    HttpServerOptions options;
+    options.host = config_.http.host;
+    options.port = config_.http.port;
+    options.allowed_hosts = config_.http.allowed_hosts;
+    http_ = std::make_unique<HttpServer>(options);
+    http_->route("/metrics", [this](const HttpRequest&) {
+      HttpResponse r;
+      r.content_type = kPrometheusContentType;
+      r.body = serviceMetricsText(service_.metrics());
+      return r;
+    });
+    probes_.routeOn(*http_);
+    routeDashboard(*http_, service_);
+    try {
+      http_->start();
+      log_.info("http_listening", {{"address", http_->address()},
+                                   {"port", static_cast<long long>(http_->port())},
+                                   {"dashboard", "http://" + http_->address() + "/"},
+                                   {"paths", "/ /api/overview /metrics /healthz /readyz"}});
+    } catch (const std::exception& e) {
+      log_.error("http_failed", {{"message", e.what()}});
+      http_.reset();
+    }
+  }
+
+  // Waits for the service and each transport to have nothing in flight, until `deadline`.
+  bool waitIdle(std::chrono::steady_clock::time_point deadline) {
+    auto left = [&] {
+      return std::chrono::duration_cast<std::chrono::milliseconds>(
+          std::max(deadline - std::chrono::steady_clock::now(), std::chrono::steady_clock::duration::zero()));
+    };
+    bool idle = service_.waitIdle(left());
+    if (shm_ && !iceoryx_lost_) idle = shm_->waitIdle(left()) && idle;
+    if (dds_) idle = dds_->waitIdle(left()) && idle;
+    return idle;
+  }
+
+  ServerConfig& config_;
+  Logger& log_;
+  const robodiff::dds_codec::DdsSecurity dds_security_;
+  Service service_;
+  std::atomic<bool> iceoryx_lost_{false};
+  std::unique_ptr<ShmServer> shm_;
+  std::unique_ptr<PauseMonitor> pause_monitor_;
+  std::unique_ptr<RoudiWatch> roudi_watch_;
+  std::unique_ptr<DdsServer> dds_;
+  Probes probes_;
+  std::unique_ptr<HttpServer> http_;
+};
+
+// The configuration from the flags (embedded defaults, a file, --set and the shortcut
+// flags); an exit code when there is nothing to serve (help, --print-config, an error).
+std::optional<int> configureFromFlags(int argc, char** argv, Flags& flags, ServerConfig& config) {
   CLI::App app{"robodiffd: the robodiff service (derivatives of robot dynamics over iceoryx and DDS)"};
-  Flags flags;
   addFlags(app, flags);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-
-  ServerConfig config;
   try {
     config = configure(flags);
   } catch (const std::exception& e) {
@@ -241,7 +400,16 @@ int main(int argc, char** argv) {
                  "nothing would reach the service\n";
     return 2;
   }
+  return std::nullopt;
+}
 
+}  // namespace
+
+int main(int argc, char** argv) {
+  const sigset_t stop_signals = blockStopSignals();
+  Flags flags;
+  ServerConfig config;
+  if (const std::optional<int> exit_code = configureFromFlags(argc, argv, flags, config)) return *exit_code;
   Logger log(stderr, config.log_level, config.log_format);
   robodiff::dds_codec::DdsSecurity dds_security;
   try {
@@ -252,139 +420,17 @@ int main(int argc, char** argv) {
   }
   const auto started = std::chrono::steady_clock::now();
   try {
-    // A submitted job's kind and parameters are checked before it is queued.
-    config.service.validate_job = [](const std::string& kind, const std::string& params_json,
-                                     const std::vector<std::filesystem::path>& readable_dirs) -> robodiff::Status {
-      try {
-        robodiff::batch::validateBatchJob(kind, nlohmann::json::parse(params_json),
-                                          robodiff::batch::FileAccess::under(readable_dirs));
-        return {};
-      } catch (const std::exception& e) {
-        return {robodiff::StatusCode::InvalidArgument,
-                "SubmitJob " + kind + ": " + robodiff::language::jsonProblem(e.what())};
-      }
-    };
-    Service service(config.service, log);
-
-    // A RouDi started here must outlive this process's iceoryx runtime, which unregisters
-    // from it at exit (a static destroyed then): a static made before the runtime is
-    // destroyed after it.
-    static std::unique_ptr<RoudiHandle> roudi;
-    std::unique_ptr<ShmServer> shm;
-    std::atomic<bool> iceoryx_lost{false};
-    std::unique_ptr<PauseMonitor> pause_monitor;
-    std::unique_ptr<RoudiWatch> roudi_watch;
-    if (config.shm.enabled) {
-      roudi = ensureRoudi(parseRoudiMode(config.shm.roudi), log);
-      ShmServerOptions options;
-      options.service = config.shm.service;
-      options.fair = {config.limits.max_queued_requests_per_client, config.limits.max_running_requests_per_client};
-      options.error_replies_per_second = config.limits.error_replies_per_second;
-      options.sessions.max_sessions = config.limits.max_shm_sessions;
-      shm = std::make_unique<ShmServer>(service, options, log);
-      if (const robodiff::Status started_shm = shm->start(); !started_shm.ok())
-        throw std::runtime_error("iceoryx: " + started_shm.message);
-      // Paused past RouDi's keep-alive timeout, or RouDi replaced: the iceoryx runtime is
-      // lost either way; the usual drain follows (the main thread's sigwait takes SIGTERM).
-      auto lose_iceoryx = [&log, &iceoryx_lost](const std::string& reason) {
-        if (iceoryx_lost.exchange(true)) return;
-        log.error("iceoryx_lost", {{"reason", reason},
-                                   {"message", "RouDi no longer knows robodiffd; draining the other transports and "
-                                               "exiting with 4 for the supervisor to restart it"}});
-        ::kill(::getpid(), SIGTERM);
-      };
-      pause_monitor = std::make_unique<PauseMonitor>(kRoudiDropPause, [lose_iceoryx](double seconds) {
-        lose_iceoryx("paused for " + std::to_string(seconds) + " s, past RouDi's keep-alive timeout");
-      });
-      roudi_watch = std::make_unique<RoudiWatch>(lose_iceoryx);
-    }
-    std::unique_ptr<DdsServer> dds;
-    if (config.dds.enabled) {
-      DdsServerOptions options;
-      if (config.dds.domain >= 0) options.domain_id = static_cast<std::uint32_t>(config.dds.domain);
-      options.service_name = config.dds.service;
-      options.max_sample_bytes = config.dds.max_sample_bytes;
-      options.security = dds_security;
-      options.fair = {config.limits.max_queued_requests_per_client, config.limits.max_running_requests_per_client};
-      options.error_replies_per_second = config.limits.error_replies_per_second;
-      dds = std::make_unique<DdsServer>(service, options, log);
-      dds->start();
-      confineDdsSockets(log);
-    }
-
-    // Operators' HTTP endpoints; stopped before the transports and the service go.
-    Probes probes;
-    std::unique_ptr<HttpServer> http;
-    if (config.http.enabled) {
-      probes.setLivenessNote([&service] {
-        return service.state() == robodiff::rpc::ServingState::Draining ? std::string("draining") : std::string();
-      });
-      const std::filesystem::path cache_dir =
-          config.service.cache_dir.empty() ? robodiff::cache::defaultCacheDir() : config.service.cache_dir;
-      addReadinessChecks(probes, config, service, dds.get(), cache_dir, iceoryx_lost);
-      HttpServerOptions options;
-      options.host = config.http.host;
-      options.port = config.http.port;
-      options.allowed_hosts = config.http.allowed_hosts;
-      http = std::make_unique<HttpServer>(options);
-      http->route("/metrics", [&service](const HttpRequest&) {
-        HttpResponse r;
-        r.content_type = kPrometheusContentType;
-        r.body = serviceMetricsText(service.metrics());
-        return r;
-      });
-      probes.routeOn(*http);
-      routeDashboard(*http, service);
-      // Not fatal: the transports are the service; a probe that cannot connect shows the problem.
-      try {
-        http->start();
-        log.info("http_listening", {{"address", http->address()},
-                                    {"port", static_cast<long long>(http->port())},
-                                    {"dashboard", "http://" + http->address() + "/"},
-                                    {"paths", "/ /api/overview /metrics /healthz /readyz"}});
-      } catch (const std::exception& e) {
-        log.error("http_failed", {{"message", e.what()}});
-        http.reset();
-      }
-    }
-    service.markServing();
-    log.info("serving", {{"instance_id", service.instanceId()},
+    Daemon daemon(config, log, dds_security);
+    daemon.start();
+    log.info("serving", {{"instance_id", daemon.service().instanceId()},
                          {"iceoryx", config.shm.enabled},
                          {"dds", config.dds.enabled},
                          {"dds_domain", static_cast<long long>(config.dds.domain)},
                          {"startup_seconds",
                           std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()}});
-
     int sig = 0;
     sigwait(&stop_signals, &sig);
-    log.info("draining", {{"signal", signalName(sig)}, {"iceoryx_lost", iceoryx_lost.load()}});
-    service.beginDrain();
-    if (shm) shm->stopAccepting();
-    if (dds) dds->stopAccepting();
-    const auto drain_timeout = std::chrono::milliseconds(static_cast<long long>(flags.drain_timeout_s * 1000));
-    armShutdownWatchdog(drain_timeout + kShutdownGrace, 3);
-    const auto drain_deadline = std::chrono::steady_clock::now() + drain_timeout;
-    auto left = [&] {
-      return std::chrono::duration_cast<std::chrono::milliseconds>(
-          std::max(drain_deadline - std::chrono::steady_clock::now(), std::chrono::steady_clock::duration::zero()));
-    };
-    bool idle = service.waitIdle(left());
-    if (shm && !iceoryx_lost) idle = shm->waitIdle(left()) && idle;
-    if (dds) idle = dds->waitIdle(left()) && idle;
-    if (!idle) log.warn("drain_timeout", {{"seconds", flags.drain_timeout_s}});
-    if (http) http->stop();  // its checks read the transports and the service
-    if (dds) dds->stop();
-    if (iceoryx_lost) {  // its ports' memory is RouDi's again: touching them would abort
-      shm.release();
-      log.info("stopped", {{"clean", idle}, {"exit_code", 4}});
-      std::fflush(nullptr);
-      std::_Exit(4);  // no static destructors: the iceoryx runtime's would touch them too
-    }
-    if (shm) shm->stop();
-    dds.reset();
-    shm.reset();
-    log.info("stopped", {{"clean", idle}});
-    return idle ? 0 : 3;
+    return daemon.drainAndStop(sig, flags.drain_timeout_s);
   } catch (const std::exception& e) {
     log.error("startup_failed", {{"message", e.what()}});
     return 1;
