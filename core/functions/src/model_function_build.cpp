@@ -107,6 +107,7 @@ class ModelFunctionBuild {
     built_.graph = std::make_unique<Graph>();
     built_.graph->setNodeLimit(options_.node_limit);
     const std::vector<std::vector<NodeId>> entries = assemble(*built_.graph);
+    graph_ = Graph();  // the working trace, often the build's largest graph, goes before the blocks are made
     defineOutputs(entries);
     built_.method = method();
     built_.timings.assemble_seconds = secondsSince(t);
