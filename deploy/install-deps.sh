@@ -14,6 +14,7 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
   coinor-libipopt-dev libzstd-dev
   libspdlog-dev libfmt-dev  # robodiffd's log lines (spdlog formats with fmt)
+  libtomlplusplus-dev  # toml++: robodiffd.conf is TOML (server/robodiffd/src/config_file.cpp)
   clang tcc
   chromium chromium-driver  # the dashboard's test runs the page in headless Chromium
 )

@@ -3,10 +3,12 @@
 // (deploy/robodiffd.conf documents each one), then overridden by flags. The defaults are
 // good for one host; with no file at all robodiffd runs on them.
 //
-// File format: "[section]" lines and "key = value" lines; '#' starts a comment; values
-// may be quoted ("..."). Sizes take units (512KiB, 4GiB), durations too (500ms, 30s,
-// 15min). An unknown section or key, or a value that does not parse, is an error naming
-// the file, the line, the key and the value.
+// The file is TOML (read with toml++, config_file.cpp): "[section]" tables of
+// "key = value" pairs. Counts are integers, flags booleans, names strings. Sizes and
+// durations are strings with a unit ("512KiB", "4GiB"; "500ms", "30s", "15min") or plain
+// integers: bytes, seconds. An unknown section or key, a value of the wrong TOML type or
+// one that does not parse, and a TOML syntax error are errors naming the file, the line
+// and column, the key and the value.
 
 #include <cstdint>
 #include <stdexcept>
@@ -70,15 +72,18 @@ class ConfigError : public std::runtime_error {
 // what is wrong otherwise.
 void parseListenAddress(const std::string& value, HttpSettings& http);
 
-// Applies one setting ("service.request_threads", "8"); `where` names its origin in
-// errors ("robodiffd.conf:12", "--set"). Throws ConfigError.
+// Applies one setting given as text ("service.request_threads", "8"; quotes around the
+// value are dropped), as --set does; `where` names its origin in errors ("--set").
+// Throws ConfigError.
 void applySetting(ServerConfig& config, const std::string& key, const std::string& value, const std::string& where);
 
-// Applies every setting of a configuration text; `source` names it in errors.
+// Applies every setting of a TOML text; `source` names it in errors. Throws ConfigError
+// (toml++'s syntax errors included).
 void applyConfigText(ServerConfig& config, const std::string& text, const std::string& source);
 void applyConfigFile(ServerConfig& config, const std::string& path);
 
-// The effective configuration in the file format (every key, with its value).
+// The effective configuration as a TOML file (every key, with its value), which
+// applyConfigText reads back to the same configuration.
 std::string formatConfig(const ServerConfig& config);
 
 // Every key, "section.key", in file order.
