@@ -470,7 +470,8 @@ WorkerPool::WorkerPool(WorkerPoolOptions options) : impl_(std::make_unique<Impl>
   if (options.workers == 0) throw std::invalid_argument("WorkerPool: workers must be at least 1");
   impl_->executable = options.worker_executable.empty() ? defaultWorkerExecutable() : options.worker_executable;
   if (impl_->executable.empty())
-    throw std::runtime_error("cannot find robodiff-worker: it is neither beside the running program nor in PATH");
+    throw std::runtime_error("cannot find robodiff-worker: it is neither beside the running program, nor in "
+                             ROBODIFF_WORKER_FROM_BINDIR " from it, nor in PATH");
   if (!isExecutableFile(impl_->executable))
     throw std::runtime_error("the worker program " + impl_->executable.string() + " is not an executable file");
   impl_->options = std::move(options);

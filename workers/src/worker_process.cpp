@@ -117,8 +117,10 @@ fs::path defaultWorkerExecutable() {
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    const fs::path beside = self.parent_path() / "robodiff-worker";
+    const fs::path beside = self.parent_path() / "robodiff-worker";  // the build tree's bin/
     if (isExecutableFile(beside)) return beside;
+    const fs::path installed = (self.parent_path() / ROBODIFF_WORKER_FROM_BINDIR / "robodiff-worker").lexically_normal();
+    if (isExecutableFile(installed)) return installed;
   }
   const char* path = std::getenv("PATH");
   const std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";

@@ -11,6 +11,12 @@
 #include <filesystem>
 #include <string>
 
+// Where `cmake --install` puts robodiff-worker, relative to the installed programs
+// (workers/CMakeLists.txt defines it from GNUInstallDirs: ../libexec/robodiff by default).
+#ifndef ROBODIFF_WORKER_FROM_BINDIR
+#define ROBODIFF_WORKER_FROM_BINDIR "../libexec/robodiff"
+#endif
+
 namespace robodiff::workers {
 
 struct WorkerProcess {

@@ -35,7 +35,7 @@
 namespace robodiff::workers {
 
 struct WorkerPoolOptions {
-  // The worker program; empty: robodiff-worker beside the running executable, then PATH.
+  // The worker program; empty: defaultWorkerExecutable().
   std::filesystem::path worker_executable;
   unsigned workers = 1;
   std::size_t queue_capacity = 256;  // jobs waiting (not running); submit throws beyond
@@ -125,8 +125,9 @@ class WorkerPool {
   std::unique_ptr<Impl> impl_;
 };
 
-// robodiff-worker beside the running executable (/proc/self/exe), else in PATH; empty
-// when neither exists.
+// robodiff-worker beside the running executable (/proc/self/exe: the build tree), else
+// where `cmake --install` puts it relative to that executable (../libexec/robodiff), else
+// in PATH; empty when none exists.
 std::filesystem::path defaultWorkerExecutable();
 
 }  // namespace robodiff::workers
