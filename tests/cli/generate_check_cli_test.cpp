@@ -126,6 +126,7 @@ TEST_P(SpecCases, ComputeBackendsAgree) {
   const SpecCase c = specCases()[static_cast<std::size_t>(GetParam())];
   TempDir tmp;
   const std::string base = "compute " + c.robot.args + " --spec " + shellQuote(fastSpec(tmp, c.spec).string()) +
+                           " --cache " + shellQuote((tmp / "cache").string()) +
                            " --derivatives --random-state 7 --backend ";
   const json reference = jsonOf(cli(base + "reference"));
   ASSERT_TRUE(reference.contains("jacobian")) << reference;

@@ -1,7 +1,9 @@
 // `robodiff compute`: evaluate one dynamics function in double precision at one state:
 // its value straight from core/dynamics (the original output), or a spec's outputs
 // (value, Jacobians, Hessians) by one of the backends (function_backends.hpp), or every
-// output of a user function, its inputs read by name (user_spec_output.hpp).
+// output of a user function, its inputs read by name (user_spec_output.hpp). The
+// generated backend takes its library from the content-addressed cache, building it
+// there when missing (cached_library.hpp), unless --no-cache.
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -12,6 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands/commands.hpp"
+#include "options/cache_location.hpp"
+#include "options/cached_library.hpp"
 #include "options/function_backends.hpp"
 #include "options/function_options.hpp"
 #include "output/output_table.hpp"
@@ -20,6 +24,7 @@
 #include "output/spec_output.hpp"
 #include "output/state_json.hpp"
 #include "output/user_spec_output.hpp"
+#include "service/service_helpers.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -34,6 +39,8 @@ struct Options {
   std::string backend;  // empty: reference, or interpreted for a user spec
   bool derivatives = false;
   StateArgs state;
+  std::string cache_dir, compiler;  // the generated backend's cache (empty: the default) and compiler
+  bool no_cache = false;            // generated: compile into a temporary directory instead
 };
 
 const std::vector<std::string> kFunctions = {"rnea", "aba",      "crba", "gravity",  "nle",
@@ -182,6 +189,52 @@ std::string backendName(const Options& o, bool user) {
   return user ? "interpreted" : "reference";
 }
 
+// The function for `backend`: traced, and with --no-cache compiled into a temporary
+// directory; a cached generated library is opened by evaluateBy.
+SpecFunction functionFor(const Options& o, const Model& model, FunctionSpec spec, Backend backend) {
+  LibraryOptions options;
+  options.compiler.compiler = o.compiler;
+  const bool cached = backend == Backend::Generated && !o.no_cache;
+  return SpecFunction(model, std::move(spec), cached ? std::vector<Backend>{} : std::vector<Backend>{backend}, options);
+}
+
+// What a generated evaluation says about the cache: "hit" (the library was in it), "built"
+// (built into it now), "off" (--no-cache); empty for the other backends.
+struct Evaluation {
+  std::vector<Eigen::MatrixXd> outputs;
+  std::string cache;
+};
+
+// f's outputs by `backend`; the generated library from the cache unless --no-cache.
+// `spec_text`: as CachedLibraryRequest::spec_text.
+Evaluation evaluateBy(const Options& o, const Model& model, const SpecFunction& f, Backend backend,
+                      const std::vector<Eigen::VectorXd>& runtime, const std::string& spec_text = "") {
+  if (backend != Backend::Generated) return {f.evaluate(backend, runtime), ""};
+  if (o.no_cache) return {f.evaluate(backend, runtime), "off"};
+  CachedLibraryRequest request;
+  request.cache_dir = cacheDirFor(o.cache_dir);
+  request.compiler = o.compiler;
+  request.urdf_text = readTextFile(o.robot.urdf, "--urdf");
+  request.urdf_source = o.robot.urdf;
+  request.floating_base = o.robot.floating_base;
+  request.spec_text = spec_text;
+  const std::string robot = model.name.empty() ? o.robot.urdf : model.name;
+  const CachedLibrary library = CachedLibrary::open(model, f, request, [&] {
+    std::cerr << "building " << f.spec().functionName() << " for " << robot << " into the cache "
+              << request.cache_dir.string() << " ...\n";
+  });
+  return {library.evaluate(f, runtime), library.hit() ? "hit" : "built"};
+}
+
+// The table header's backend: the backend's name, and for a generated one, the cache.
+std::string backendLabel(Backend backend, const std::string& cache) {
+  std::string label = std::string(toString(backend)) + " backend";
+  if (cache == "hit") label += ", from the cache";
+  if (cache == "built") label += ", built into the cache";
+  if (cache == "off") label += ", not cached";
+  return label;
+}
+
 // A spec's outputs (--spec, --derivatives or --backend) by the chosen backend.
 void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
   const Model model = loadRobot(o.robot);
@@ -190,15 +243,16 @@ void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
   State state;
   const std::vector<Eigen::VectorXd> runtime = runtimeInputs(o, model, spec, label, state);
   const Backend backend = parseBackend(backendName(o, false));
-  const SpecFunction f(model, spec, {backend});
-  const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
+  const SpecFunction f = functionFor(o, model, spec, backend);
+  const auto [out, cache] = evaluateBy(o, model, f, backend, runtime);
   if (o.format == "table") {
     std::cout << label << " of " << (model.name.empty() ? o.robot.urdf : model.name) << " (nq = " << model.nq
-              << ", nv = " << model.nv << ", " << toString(backend) << " backend)\n";
+              << ", nv = " << model.nv << ", " << backendLabel(backend, cache) << ")\n";
     printSpecTables(std::cout, model, spec, blockInfos(f), out);
     return;
   }
   nlohmann::json j = specOutputsJson(label, toString(backend), model, spec, blockInfos(f), out);
+  if (!cache.empty()) j["cache"] = cache;
   if (o.state.seed) j["random_state"] = drawnStateJson(*o.state.seed, state);
   std::cout << j.dump() << "\n";
 }
@@ -219,15 +273,16 @@ void runUser(const Options& o, const FunctionSpec& spec) {
   if (!o.frame.empty()) throw std::invalid_argument("--frame does not apply to a user spec: its expressions name frames");
   const Model model = loadRobot(o.robot);
   const Backend backend = parseBackend(backendName(o, true));
-  const SpecFunction f(model, spec, {backend});
+  const SpecFunction f = functionFor(o, model, spec, backend);
   const std::vector<NamedInput> inputs = userInputs(f);
   const auto [runtime, source] = loadUserInputs(o.state, model, spec, inputs);
-  const std::vector<Eigen::MatrixXd> out = f.evaluate(backend, runtime);
+  const std::string spec_text = backend == Backend::Generated && !o.no_cache ? readTextFile(o.spec, "--spec") : "";
+  const auto [out, cache] = evaluateBy(o, model, f, backend, runtime, spec_text);
   const bool reference = backend == Backend::Reference;
   if (o.format == "table") {
     std::cout << spec.functionName() << " of " << (model.name.empty() ? o.robot.urdf : model.name)
-              << " (nq = " << model.nq << ", nv = " << model.nv << ", " << source << ", " << toString(backend)
-              << " backend)\n";
+              << " (nq = " << model.nq << ", nv = " << model.nv << ", " << source << ", "
+              << backendLabel(backend, cache) << ")\n";
     if (reference)
       std::cout << "values by " << kUserReferenceValues << ", derivatives by " << kUserReferenceDerivatives << "\n";
     printUserTables(std::cout, model, spec, inputs, out);
@@ -236,6 +291,7 @@ void runUser(const Options& o, const FunctionSpec& spec) {
   nlohmann::json meta = {{"function", spec.functionName()}, {"backend", toString(backend)},
                          {"nq", model.nq}, {"nv", model.nv}};
   if (reference) meta["method"] = {{"values", kUserReferenceValues}, {"derivatives", kUserReferenceDerivatives}};
+  if (!cache.empty()) meta["cache"] = cache;
   if (o.state.seed) meta["random_state"] = drawnInputsJson(*o.state.seed, inputs, runtime);
   std::cout << userOutputsJson(std::move(meta), spec, out).dump() << "\n";
 }
@@ -271,8 +327,10 @@ void addComputeCommand(CLI::App& app) {
                   "derivatives from the builder's expression graph evaluated node by node "
                   "(symbolic::Graph::evaluate: slow, but no code generation or interpreter involved); for a user "
                   "spec, the values from the double evaluation of its expressions and the derivatives by central "
-                  "finite differences (approximate). generated: C code generated and compiled into a temporary "
-                  "directory (removed afterwards), loaded and run. interpreted (the default for a user spec): the "
+                  "finite differences (approximate). generated: the function's compiled library from the cache "
+                  "(--cache), built there first by a robodiff-worker when missing (the same library warmup and "
+                  "robodiffd build), loaded and run; with --no-cache compiled into a temporary directory instead "
+                  "(removed afterwards). interpreted (the default for a user spec): the "
                   "same graph run by the interpreter, nothing compiled")
       ->check(CLI::IsMember(backendNames()));
   cmd->add_flag("--derivatives", options->derivatives,
@@ -281,6 +339,18 @@ void addComputeCommand(CLI::App& app) {
                 "the spec asks for, Hessians (full symmetric [n][n]) included. Without it only the value is printed. A user "
                 "spec's outputs are always all printed");
   cmd->add_option("--format", options->format, "json (default) or table")->check(CLI::IsMember({"json", "table"}));
+  CLI::Option* cache = cmd->add_option("--cache", options->cache_dir,
+                                       "Cache directory of --backend generated (default: $ROBODIFF_CACHE_DIR, else "
+                                       "$XDG_CACHE_HOME/robodiff, else ~/.cache/robodiff); created 0700; refused when "
+                                       "other users may write to it")
+                           ->type_name("DIR");
+  cmd->add_flag("--no-cache", options->no_cache,
+                "--backend generated: compile into a temporary directory (removed afterwards) and leave the cache "
+                "alone: neither read nor written")
+      ->excludes(cache);
+  cmd->add_option("--compiler", options->compiler,
+                  "C compiler of --backend generated, a path or a name in PATH (default: $CC, else cc)")
+      ->type_name("CC");
   cmd->footer(
       "Output (json): {\"function\", \"nq\", \"nv\", \"value\"} for --function alone (reference backend, no "
       "--derivatives); otherwise {\"function\", \"backend\", \"nq\", \"nv\", \"value\" (a vector, or [rows][cols]), "
@@ -292,7 +362,11 @@ void addComputeCommand(CLI::App& app) {
       "(sparse blocks expanded, a sparse Hessian mirrored to the full matrix). With the reference backend, "
       "\"method\" says the derivatives are central finite differences.\n"
       "With --random-state SEED the JSON also has \"random_state\": the seed and the arrays drawn, by input name, "
-      "so the same state can be given again with --state FILE.");
+      "so the same state can be given again with --state FILE.\n"
+      "With --backend generated the JSON also has \"cache\": \"hit\" (the library was in the cache: nothing "
+      "compiled), \"built\" (built into the cache now; a later identical call is a hit) or \"off\" (--no-cache). "
+      "A cached library whose SHA-256 no longer matches the index is moved to the cache's quarantine and rebuilt, "
+      "never loaded.");
   cmd->callback([options] { run(*options); });
 }
 
