@@ -5,7 +5,10 @@
 // and evaluates it: the model row, the function's phase reaching "compiled", the call
 // count and latency, a failed function with its message, a job's progress, all refreshed
 // live without a reload and without errors; a screenshot is kept in
-// <build>/test-artifacts/dashboard.png.
+// <build>/test-artifacts/dashboard.png. Then a robodiffd whose compiler always fails with
+// a long message: the page opened after a few seconds of calls draws its charts at once
+// (the server's history), the 500-character note takes one line and shows whole on a
+// click, and failed builds and invalid specs are counted apart.
 // Skips (naming the program) where chromium or chromedriver is not installed.
 #include <signal.h>
 
@@ -111,6 +114,30 @@ TEST(DashboardBrowser, Base64DecodesWithAndWithoutPadding) {
   EXPECT_THROW(base64Decode("Zm9v!"), std::runtime_error);
 }
 
+// On a failure, the page as it was, for whoever reads the test's output.
+struct ShowPageOnFailure {
+  WebDriverSession& browser;
+  ChromeDriverProcess& driver;
+  RobodiffdProcess& server;
+  ~ShowPageOnFailure() {
+    if (!::testing::Test::HasFailure()) return;
+    try {
+      writeBytes(artifactsDir() / "dashboard-failure.png", browser.screenshotPng());
+      std::cerr << "page text:\n"
+                << browser.executeScript("return document.body ? document.body.innerText.slice(0, 3000) : '';")
+                       .get<std::string>()
+                << "\nwindow.robodiffDashboard.errors: "
+                << browser.executeScript("return window.robodiffDashboard && window.robodiffDashboard.errors;")
+                << "\nscreenshot: " << (artifactsDir() / "dashboard-failure.png").string() << "\n";
+    } catch (const std::exception& e) {
+      std::cerr << "no page to show: " << e.what() << "\n";
+    }
+    std::cerr << "robodiffd log:\n" << server.log() << "\nchromedriver log (tail):\n";
+    const std::string log = driver.log();
+    std::cerr << (log.size() > 4000 ? log.substr(log.size() - 4000) : log) << "\n";
+  }
+};
+
 // A JS expression over the function row: true when `condition` (using `row`) holds,
 // else what the row shows (so a timeout says what it was).
 std::string functionRow(const std::string& function_id, const std::string& condition) {
@@ -144,29 +171,7 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
   ASSERT_TRUE(loaded.ok()) << toString(loaded.code) << ": " << loaded.message;
 
   WebDriverSession browser(driver);
-  // On a failure, the page as it was, for whoever reads the test's output.
-  struct ShowPageOnFailure {
-    WebDriverSession& browser;
-    ChromeDriverProcess& driver;
-    RobodiffdProcess& server;
-    ~ShowPageOnFailure() {
-      if (!::testing::Test::HasFailure()) return;
-      try {
-        writeBytes(artifactsDir() / "dashboard-failure.png", browser.screenshotPng());
-        std::cerr << "page text:\n"
-                  << browser.executeScript("return document.body ? document.body.innerText.slice(0, 3000) : '';")
-                         .get<std::string>()
-                  << "\nwindow.robodiffDashboard.errors: "
-                  << browser.executeScript("return window.robodiffDashboard && window.robodiffDashboard.errors;")
-                  << "\nscreenshot: " << (artifactsDir() / "dashboard-failure.png").string() << "\n";
-      } catch (const std::exception& e) {
-        std::cerr << "no page to show: " << e.what() << "\n";
-      }
-      std::cerr << "robodiffd log:\n" << server.log() << "\nchromedriver log (tail):\n";
-      const std::string log = driver.log();
-      std::cerr << (log.size() > 4000 ? log.substr(log.size() - 4000) : log) << "\n";
-    }
-  } show_page_on_failure{browser, driver, server};
+  const ShowPageOnFailure show_page_on_failure{browser, driver, server};
 
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
   browser.navigate(url);
@@ -257,6 +262,10 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
         "const item = items.find((i) => i.textContent.includes('no_such_frame')); "
         "return item ? item.textContent.includes('invalid spec') || item.textContent : 'no failure listed'; })()",
         10s));
+    EXPECT_TRUE(browser.waitFor("document.getElementById('specs-invalid').textContent === '1' || "
+                                "document.getElementById('specs-invalid').textContent",
+                                10s));
+    EXPECT_EQ(browser.executeScript("return document.getElementById('builds-failed').textContent;"), "0");
   }
 
   // A small trajectory job (its function is in the cache by now): its row and progress.
@@ -301,6 +310,112 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
   EXPECT_TRUE(isPng(png));
   EXPECT_GT(png.size(), 10u * 1024) << artifact;
   EXPECT_EQ(std::filesystem::file_size(artifact), png.size());
+
+  browser.quit();
+  driver.stop();
+  client.reset();
+  EXPECT_EQ(server.terminate(), 0) << server.log();
+}
+
+
+// A "compiler" that tells its version and fails every build with one long line: the
+// function is served by the interpreter, its note being that line (and the command).
+std::filesystem::path failingCompiler(const TempDir& dir) {
+  std::string line = "fakecc: error:";
+  while (line.size() < 500) line += " this compiler fails every build on purpose, with a long message;";
+  const std::filesystem::path path = dir.file("fakecc", "#!/bin/sh\ncase \"$1\" in --version|-v) echo 'fakecc 1.0'; exit 0;; esac\n"
+                                                        "echo '" + line + " END' >&2\nexit 1\n");
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+  return path;
+}
+
+TEST(DashboardBrowser, ChartsAtFirstSightOneLineNotesAndFailuresCountedApart) {
+  signal(SIGTERM, SIG_IGN);
+  TempDir dir;
+  ChromeDriverProcess driver(dir / "chromedriver.log");
+  REQUIRE_CHROMEDRIVER(driver);
+  sharedRoudi();
+  RobodiffdProcess server(dir / "cache", dir / "robodiffd.log",
+                          {"--roudi", "external", "--http", "127.0.0.1:0", "--set",
+                           "build.compiler=" + failingCompiler(dir).string()});
+  ASSERT_TRUE(server.running());
+  const json listening = logEvent(server.log(), "http_listening");
+  ASSERT_TRUE(listening.is_object()) << server.log();
+  const auto port = listening["port"].get<std::uint16_t>();
+  auto client = connectTo("iceoryx");
+  rpc::LoadModelRequest load;
+  load.urdf = arm7Text();
+  rpc::LoadModelReply model;
+  ASSERT_TRUE(client->loadModel(load, model).ok());
+  rpc::GetFunctionRequest get{model.model_id, kRneaJacobianSpec, true};
+  rpc::GetFunctionReply function;
+  const Status got = client->getFunction(get, function);
+  ASSERT_TRUE(got.ok()) << toString(got.code) << ": " << got.message;  // the interpreter serves it
+  rpc::GetFunctionRequest bad{model.model_id, R"({"function": "fk", "frame": "no_such_frame", "outputs": [{"kind": "value"}]})", true};
+  rpc::GetFunctionReply bad_reply;
+  EXPECT_EQ(client->getFunction(bad, bad_reply).code, StatusCode::InvalidArgument);
+
+  // ~3 s of calls before any page is open: the server's history holds them.
+  const std::vector<double> in(21, 0.1);
+  std::vector<double> out(7 + 7 * 21);
+  for (int burst = 0; burst < 8; ++burst) {
+    for (int i = 0; i < 20; ++i) ASSERT_TRUE(client->evaluate(function.function_id, in, out).ok());
+    std::this_thread::sleep_for(400ms);
+  }
+
+  WebDriverSession browser(driver);
+  const ShowPageOnFailure show_page_on_failure{browser, driver, server};
+  browser.navigate("http://127.0.0.1:" + std::to_string(port) + "/");
+  // Right after the first refresh: a latency line of several points, from before the page opened.
+  ASSERT_TRUE(browser.waitFor("window.robodiffDashboard && window.robodiffDashboard.refreshes >= 1", 10s));
+  const json first = browser.executeScript(
+      "const d = window.robodiffDashboard; "
+      "const vertices = [...document.querySelectorAll('svg#latency-chart path')].map((p) => "
+      "(p.getAttribute('d').match(/[ML]/g) || []).length); "
+      "return {refreshes: d.refreshes, vertices: Math.max(0, ...vertices), "
+      "before_open: d.history.filter((p) => p.t < d.openedAt - 1 && p.latency['Evaluate p50'] != null).length};");
+  EXPECT_LE(first["refreshes"].get<int>(), 2) << first;
+  EXPECT_GE(first["vertices"].get<int>(), 3) << first;
+  EXPECT_GE(first["before_open"].get<int>(), 3) << first;
+
+  // The build failed: its note is one line, ellipsised, with the whole text on demand.
+  ASSERT_TRUE(browser.waitFor(functionRow(function.function_id, "phase === 'build-failed'"), 60s));
+  const std::string note = "document.querySelector('table#functions tbody tr[data-function-id=\"" +
+                           function.function_id + "\"] td.message .note')";
+  const std::string measure =
+      "const n = " + note + "; const line = parseFloat(getComputedStyle(n).lineHeight); "
+      "const f = window.robodiffDashboard.overview.functions.find((f) => f.id === arguments[0]); "
+      "return {height: n.getBoundingClientRect().height, line, cut: n.scrollWidth > n.clientWidth, "
+      "text: n.textContent, title: n.title, shown: n.innerText, message: f.message, "
+      "expanded: n.classList.contains('expanded')};";
+  json shown = browser.executeScript(measure, {function.function_id});
+  const std::string message = shown["message"].get<std::string>();
+  EXPECT_GE(message.size(), 500u);
+  EXPECT_NE(message.find("on purpose"), std::string::npos) << message;
+  EXPECT_LT(shown["height"].get<double>(), 1.5 * shown["line"].get<double>()) << shown;  // one line
+  EXPECT_TRUE(shown["cut"].get<bool>()) << shown;
+  EXPECT_EQ(shown["title"], message);
+  EXPECT_EQ(shown["text"], message);
+
+  browser.executeScript(note + ".click();");
+  const int refreshes = browser.executeScript("return window.robodiffDashboard.refreshes;").get<int>();
+  ASSERT_TRUE(browser.waitFor("window.robodiffDashboard.refreshes > " + std::to_string(refreshes), 5s));
+  shown = browser.executeScript(measure, {function.function_id});  // redrawn since the click
+  EXPECT_TRUE(shown["expanded"].get<bool>()) << shown;
+  EXPECT_GT(shown["height"].get<double>(), 3 * shown["line"].get<double>()) << shown;
+  EXPECT_EQ(shown["shown"], message);  // every character visible
+  browser.executeScript(note + ".click();");
+  shown = browser.executeScript(measure, {function.function_id});
+  EXPECT_LT(shown["height"].get<double>(), 1.5 * shown["line"].get<double>()) << shown;
+
+  // One failed build, one invalid spec: each in its own tile.
+  EXPECT_TRUE(browser.waitFor("document.getElementById('builds-failed').textContent === '1' && "
+                              "document.getElementById('specs-invalid').textContent === '1' || "
+                              "[document.getElementById('builds-failed').textContent, "
+                              "document.getElementById('specs-invalid').textContent]",
+                              5s));
+  EXPECT_EQ(browser.executeScript("return window.robodiffDashboard.errors;"), json::array());
+  writeBytes(artifactsDir() / "dashboard-notes.png", browser.screenshotPng());
 
   browser.quit();
   driver.stop();

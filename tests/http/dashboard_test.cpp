@@ -30,6 +30,7 @@ server::ServiceOverview sampleOverview() {
   o.metrics.cache_misses = 1;
   o.metrics.cache_bytes = 4096;
   o.metrics.builds_failed = 1;
+  o.metrics.specs_invalid = 2;
   o.metrics.jobs_enabled = true;
   o.metrics.jobs.running = 1;
   o.models.push_back({"m1", "arm7 (arm.urdf)", false, 7, 7, 7, 18, 2, 1});
@@ -92,6 +93,7 @@ TEST(Dashboard, OverviewJsonCarriesEveryFieldInItsUnit) {
   EXPECT_DOUBLE_EQ(j["cache"]["hit_rate"].get<double>(), 0.75);
   EXPECT_EQ(j["cache"]["bytes"], 4096);
   EXPECT_EQ(j["builds"]["failed"], 1);
+  EXPECT_EQ(j["specs_invalid"], 2);  // apart from the failed builds
   ASSERT_EQ(j["build_failures"].size(), 1u);
   EXPECT_EQ(j["build_failures"][0]["message"], "cc: error: boom");
   EXPECT_TRUE(j["build_failures"][0]["interpreter_serves"].get<bool>());
@@ -123,7 +125,8 @@ TEST(Dashboard, ThePageHoldsItsElementsAndLoadsNothingFromElsewhere) {
   ASSERT_EQ(page.rfind("<!DOCTYPE html>", 0), 0u);
   for (const char* id : {"id=\"models\"", "id=\"functions\"", "id=\"jobs\"", "id=\"build-queue\"",
                          "id=\"build-failures\"", "id=\"latency-chart\"", "id=\"rate-chart\"", "id=\"cache-hit-rate\"",
-                         "id=\"cache-bytes\"", "id=\"refresh-status\"", "/api/overview", "robodiffDashboard"})
+                         "id=\"cache-bytes\"", "id=\"refresh-status\"", "id=\"builds-failed\"", "id=\"specs-invalid\"",
+                         "/api/overview", "/api/history", "robodiffDashboard"})
     EXPECT_NE(page.find(id), std::string::npos) << id;
   // Every src/href is local (robot computers have no internet; nothing may be fetched).
   const std::regex external(R"((src|href)\s*=\s*["']?(https?:)?//)");

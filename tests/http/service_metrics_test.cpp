@@ -1,10 +1,16 @@
 // A real Service's metrics(): requests recorded by method and status land in the counters
-// and in cumulative latency buckets that agree with them, and the page renders validly.
+// and in cumulative latency buckets that agree with them, and the page renders validly;
+// invalid specs and failed library builds are two counters, each counting only its own.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdio>
+#include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "http/serving_service.hpp"
+#include "robodiff/server/dashboard.hpp"
 #include "robodiff/server/service.hpp"
 #include "robodiff/server/service_metrics_text.hpp"
 #include "support/prometheus_text.hpp"
@@ -55,8 +61,63 @@ TEST(ServiceMetrics, RecordedRequestsBecomeCountersAndBuckets) {
   EXPECT_EQ(p.value("robodiff_cache_entries"), 0.0);
   EXPECT_EQ(p.value("robodiff_cache_quarantined"), 0.0);
   EXPECT_EQ(p.value("robodiff_build_retries_total"), 0.0);
+  EXPECT_EQ(p.value("robodiff_builds_failed_total"), 0.0);
+  EXPECT_EQ(p.value("robodiff_specs_invalid_total"), 0.0);
   EXPECT_EQ(p.value("robodiff_workers", {{"state", "idle"}}), 1.0);
   EXPECT_EQ(p.family("robodiff_jobs")->samples.size(), 0u);  // jobs off
+}
+
+Status getFunction(server::Service& service, const std::string& model_id, const std::string& spec) {
+  rpc::GetFunctionRequest request;
+  request.model_id = model_id;
+  request.spec_json = spec;
+  request.wait = true;
+  rpc::GetFunctionReply reply;
+  server::CallContext ctx;
+  ctx.deadline = server::Clock::now() + 30s;
+  return service.getFunction(ctx, request, reply);
+}
+
+TEST(ServiceMetrics, InvalidSpecsAreCountedApartFromFailedBuilds) {
+  // Compiling on with a "compiler" that cannot even tell its version: every library build
+  // fails (the interpreter serves the function), while a spec naming a frame the model
+  // lacks never builds at all.
+  ServingService service([](server::ServiceOptions& o) {
+    o.compile = true;
+    o.compiler = "/bin/false";
+  });
+  rpc::LoadModelRequest load;
+  load.urdf = readFile(sourceDir() / "examples/robots/arm7.urdf");
+  rpc::LoadModelReply model;
+  server::CallContext ctx;
+  ASSERT_TRUE(service->loadModel(ctx, load, model).ok());
+
+  const Status served = getFunction(*service, model.model_id, R"({"function": "rnea", "outputs": [{"kind": "value"}]})");
+  EXPECT_TRUE(served.ok()) << served.message;  // the interpreter serves it
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (service->metrics().builds_failed == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(service->metrics().builds_failed, 1u);
+  EXPECT_EQ(service->metrics().specs_invalid, 0u);
+
+  const std::string bad = R"({"function": "fk", "frame": "no_such_frame", "outputs": [{"kind": "value"}]})";
+  EXPECT_EQ(getFunction(*service, model.model_id, bad).code, StatusCode::InvalidArgument);
+  // Asked again: answered from the recent failure, not traced (nor counted) again.
+  EXPECT_EQ(getFunction(*service, model.model_id, bad).code, StatusCode::InvalidArgument);
+  const std::string other = R"({"function": "fk", "frame": "nor_this_one", "outputs": [{"kind": "value"}]})";
+  EXPECT_EQ(getFunction(*service, model.model_id, other).code, StatusCode::InvalidArgument);
+
+  const server::ServiceMetrics m = service->metrics();
+  EXPECT_EQ(m.specs_invalid, 2u);
+  EXPECT_EQ(m.builds_failed, 1u);  // unchanged by the invalid specs
+  const PromText p = parsePrometheusText(server::serviceMetricsText(m));
+  ASSERT_TRUE(p.errors.empty()) << p.errorText();
+  EXPECT_EQ(p.value("robodiff_specs_invalid_total"), 2.0);
+  EXPECT_EQ(p.value("robodiff_builds_failed_total"), 1.0);
+  EXPECT_EQ(p.family("robodiff_specs_invalid_total")->type, "counter");
+  const nlohmann::json overview = nlohmann::json::parse(server::overviewJson(service->overview()));
+  EXPECT_EQ(overview["specs_invalid"], 2);
+  EXPECT_EQ(overview["builds"]["failed"], 1);
 }
 
 }  // namespace

@@ -74,6 +74,7 @@ std::string overviewJson(const ServiceOverview& o) {
                    {"running", m.builds_running},
                    {"failed", m.builds_failed},
                    {"done", m.builds_done}};
+  out["specs_invalid"] = m.specs_invalid;  // never built: apart from builds.failed
   out["build_failures"] = json::array();
   for (const auto& f : o.build_failures)
     out["build_failures"].push_back({{"unix_seconds", f.unix_seconds},
@@ -105,8 +106,9 @@ std::string overviewJson(const ServiceOverview& o) {
   for (const auto& j : o.jobs) out["jobs"].push_back(jobJson(j));
   out["jobs_error"] = o.jobs_error;
 
-  // Per method: figures since start, and the fine histogram the page differences
-  // between two polls for the latency of the last second.
+  // Per method: figures since start, and the fine histogram since start (a reader that
+  // differences two polls gets the latency in between; the page's charts come from
+  // /api/history, which does that on the server every second).
   out["methods"] = json::array();
   for (const rpc::MethodStats& s : o.methods) {
     json buckets = json::array();

@@ -63,6 +63,13 @@ std::string serviceMetricsText(const ServiceMetrics& m) {
   t.sample("robodiff_builds", {{"state", "running"}}, m.builds_running);
   t.sample("robodiff_builds", {{"state", "done"}}, m.builds_done);
   t.sample("robodiff_builds", {{"state", "failed"}}, m.builds_failed);
+  t.family("robodiff_builds_failed_total", MetricType::Counter,
+           "Library builds that failed (the compiler or its worker); the interpreter serves those functions.");
+  t.sample("robodiff_builds_failed_total", {}, d(m.builds_failed));
+  t.family("robodiff_specs_invalid_total", MetricType::Counter,
+           "Functions whose spec never built: it does not fit the model (unknown frame, bad expression, ...) "
+           "or is too large. Not counted as failed builds.");
+  t.sample("robodiff_specs_invalid_total", {}, d(m.specs_invalid));
 
   t.family("robodiff_cache_hits_total", MetricType::Counter, "Functions found compiled in the cache.");
   t.sample("robodiff_cache_hits_total", {}, d(m.cache_hits));

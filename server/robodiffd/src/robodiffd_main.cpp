@@ -343,7 +343,7 @@ class Daemon {
       log_.info("http_listening", {{"address", http_->address()},
                                    {"port", static_cast<long long>(http_->port())},
                                    {"dashboard", "http://" + http_->address() + "/"},
-                                   {"paths", "/ /api/overview /metrics /healthz /readyz"}});
+                                   {"paths", "/ /api/overview /api/history /metrics /healthz /readyz"}});
     } catch (const std::exception& e) {
       log_.error("http_failed", {{"message", e.what()}});
       http_.reset();

@@ -85,6 +85,7 @@ BuildFigures FunctionBuilds::figures() const {
   f.builds_failed = builds_failed_.load(std::memory_order_relaxed);
   f.builds_done = builds_done_.load(std::memory_order_relaxed);
   f.build_retries = builder_.workerDeathRetries();
+  f.specs_invalid = specs_invalid_.load(std::memory_order_relaxed);
   return f;
 }
 
@@ -123,6 +124,7 @@ void FunctionBuilds::failFunction(const std::shared_ptr<FunctionEntry>& function
                                 {"stage", toString(stage)},
                                 {"code", toString(status.code)},
                                 {"message", status.message}});
+  if (stage == FailureStage::InvalidSpec) specs_invalid_.fetch_add(1, std::memory_order_relaxed);
   keepFailure(f, status.message, stage, status);
   if (failed_) failed_(function);  // unloaded before waiters wake: none sees it still loaded
   f.fail(status.code, status.message);

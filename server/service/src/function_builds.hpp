@@ -46,6 +46,7 @@ struct BuildFigures {
   std::uint64_t cache_hits = 0, cache_misses = 0;
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
   std::uint64_t build_retries = 0;  // builds tried again after their worker died
+  std::uint64_t specs_invalid = 0;  // functions failed as invalid specs (never built; not in builds_failed)
 };
 
 // Where a function failed.
@@ -109,6 +110,7 @@ class FunctionBuilds {
 
   std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};
   std::atomic<std::uint32_t> builds_queued_{0}, builds_running_{0}, builds_failed_{0}, builds_done_{0};
+  std::atomic<std::uint64_t> specs_invalid_{0};
   mutable std::mutex failures_mutex_;
   std::deque<BuildFailureRecord> failures_;  // newest first
 

@@ -26,6 +26,7 @@ bool fillServiceFigures(State& s, Out& out) {
   out.cache_hits = builds.cache_hits;
   out.cache_misses = builds.cache_misses;
   if constexpr (requires { out.build_retries; }) out.build_retries = builds.build_retries;
+  if constexpr (requires { out.specs_invalid; }) out.specs_invalid = builds.specs_invalid;
   bool cache_ok = true;
   try {
     const cache::CacheStats stats = s.cache.stats();

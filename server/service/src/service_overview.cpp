@@ -45,6 +45,15 @@ const char* phaseOf(const detail::FunctionEntry& f) {
 
 }  // namespace
 
+std::vector<ServiceOverview::MethodLatency> Service::requestLatencies() const {
+  std::vector<ServiceOverview::MethodLatency> out;
+  for (std::uint32_t i = 0; i < rpc::kMethodCount; ++i) {
+    const auto method = static_cast<rpc::Method>(i);
+    out.push_back({method, state_->stats.latency(method).occupied()});
+  }
+  return out;
+}
+
 ServiceOverview Service::overview(std::size_t max_jobs) const {
   State& s = *state_;
   ServiceOverview o;
@@ -52,10 +61,7 @@ ServiceOverview Service::overview(std::size_t max_jobs) const {
   o.version = s.options.version;
   o.metrics = metrics();
   o.methods = s.stats.methods();
-  for (std::uint32_t i = 0; i < rpc::kMethodCount; ++i) {
-    const auto method = static_cast<rpc::Method>(i);
-    o.latencies.push_back({method, s.stats.latency(method).occupied()});
-  }
+  o.latencies = requestLatencies();
 
   for (const detail::Registry::ModelView& view : s.registry.modelViews()) {
     const detail::ModelEntry& m = *view.model;

@@ -2,12 +2,14 @@
 // The operators' dashboard: one page (GET / and /dashboard; HTML, CSS and script in one
 // file, server/http/dashboard/dashboard.html, compiled in) that polls GET /api/overview
 // every second and redraws: models, functions with their compile state and latency, the
-// build queue and failed builds, the cache, the workers, jobs with progress bars, and
-// latency and request-rate charts drawn from the fine histograms' differences.
+// build queue, failed builds and invalid specs, the cache, the workers, jobs with progress
+// bars, and latency and request-rate charts drawn from GET /api/history (the server's
+// recent history, dashboard_history.hpp: the charts are full from the moment it opens).
 
 #include <string>
 #include <string_view>
 
+#include "robodiff/server/dashboard_history.hpp"
 #include "robodiff/server/http_server.hpp"
 #include "robodiff/server/service.hpp"
 
@@ -20,7 +22,8 @@ std::string_view dashboardPage();
 // "The dashboard"). Times in seconds, latencies in microseconds.
 std::string overviewJson(const ServiceOverview& overview);
 
-// Routes /, /dashboard (the page) and /api/overview on `server`; `service` outlives it.
-void routeDashboard(HttpServer& server, const Service& service);
+// Routes /, /dashboard (the page), /api/overview and /api/history on `server`, and starts
+// the history's sampling (it stops when `server` is destroyed); `service` outlives `server`.
+void routeDashboard(HttpServer& server, const Service& service, DashboardHistoryOptions history = {});
 
 }  // namespace robodiff::server

@@ -4,7 +4,8 @@
 // robodiff_uptime_seconds, robodiff_requests_total{method,status},
 // robodiff_request_duration_seconds{method} (histogram), robodiff_transport_requests_total
 // and _errors_total{transport}, robodiff_models_loaded, robodiff_functions_loaded,
-// robodiff_functions_compiled, robodiff_builds{state}, robodiff_cache_hits_total,
+// robodiff_functions_compiled, robodiff_builds{state}, robodiff_builds_failed_total,
+// robodiff_specs_invalid_total, robodiff_cache_hits_total,
 // robodiff_cache_misses_total, robodiff_cache_bytes, robodiff_cache_entries,
 // robodiff_workers{state}, robodiff_request_queue_depth, robodiff_request_queue_capacity,
 // robodiff_jobs{state}.

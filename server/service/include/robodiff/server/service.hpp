@@ -81,7 +81,11 @@ struct ServiceMetrics {
   std::vector<MethodFigures> methods;          // one per method, in Method order
   std::vector<rpc::TransportCounts> transports;
   std::uint32_t models_loaded = 0, functions_loaded = 0, functions_compiled = 0;
+  // builds_failed: library builds that failed (the compiler or its worker); done and failed since start.
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
+  // Functions whose spec never built since start: it does not fit the model (unknown
+  // frame, bad expression, ...) or is too large. Counted apart from builds_failed.
+  std::uint64_t specs_invalid = 0;
   std::uint64_t cache_hits = 0, cache_misses = 0, cache_bytes = 0, cache_entries = 0;
   bool cache_stats_ok = true;  // false: the cache's figures could not be read (bytes, entries 0)
   std::uint64_t cache_quarantined = 0;  // entries moved to the cache's quarantine/ (on disk now)
@@ -158,6 +162,9 @@ class Service final : public ServiceApi {
   ServiceMetrics metrics() const;
   // The dashboard's snapshot; any thread (reads the cache's stats and the job index).
   ServiceOverview overview(std::size_t max_jobs = 50) const;
+  // Every method's fine latency histogram since start (its count: the method's requests);
+  // cheap (atomics only), any thread. A sampler differences two of them (the dashboard's history).
+  std::vector<ServiceOverview::MethodLatency> requestLatencies() const;
 
   // ServiceApi
   const std::string& instanceId() const override;
