@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace robodiff::dds_codec {
@@ -85,374 +86,80 @@ void mapFromWire(const Seq& in, std::vector<T>& out, Convert convert) {
   for (uint32_t i = 0; i < in._length; ++i) convert(in._buffer[i], out[i]);
 }
 
-void stringsToWire(const std::vector<std::string>& in, dds_sequence_string& out) {
-  mapToWire(in, out, [](const std::string& s, char*& o) { o = dupString(s); });
-}
-void stringsFromWire(const dds_sequence_string& in, std::vector<std::string>& out) {
-  mapFromWire(in, out, [](const char* s, std::string& o) { o = toString(s); });
+// ---- every message, derived from its field list ---------------------------------------
+
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+template <class T, class W>
+void put(const T& in, W& out) {
+  if constexpr (std::is_same_v<T, std::string>) {
+    out = dupString(in);
+  } else if constexpr (std::is_enum_v<T>) {
+    out = static_cast<W>(static_cast<std::uint32_t>(in));
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    out = in;
+  } else if constexpr (IsVector<T>::value) {
+    using Element = typename T::value_type;
+    if constexpr (std::is_arithmetic_v<Element>) copyToWire(in, out);
+    else mapToWire(in, out, [](const Element& i, auto& o) { put(i, o); });
+  } else {
+    rpc::Fields<T>::visit(in, out, [](const char*, const auto& i, auto& o) { put(i, o); });
+  }
 }
 
-template <class Out, class In>
-Out castEnum(In value) {
-  return static_cast<Out>(static_cast<std::uint32_t>(value));
+template <class W, class T>
+void get(const W& in, T& out) {
+  if constexpr (std::is_same_v<T, std::string>) {
+    out = toString(in);
+  } else if constexpr (std::is_same_v<T, StatusCode>) {
+    out = statusFromWire(in);
+  } else if constexpr (std::is_enum_v<T>) {
+    out = static_cast<T>(static_cast<std::uint32_t>(in));
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    out = in;
+  } else if constexpr (IsVector<T>::value) {
+    using Element = typename T::value_type;
+    if constexpr (std::is_arithmetic_v<Element>) copyFromWire(in, out);
+    else mapFromWire(in, out, [](const auto& i, Element& o) { get(i, o); });
+  } else {
+    rpc::Fields<T>::visit(out, in, [](const char*, auto& o, const auto& i) { get(i, o); });
+  }
 }
 
 }  // namespace
+
+template <class Message, class Wire>
+void toWire(const Message& in, Wire& out) {
+  put(in, out);
+}
+template <class Wire, class Message>
+void fromWire(const Wire& in, Message& out) {
+  get(in, out);
+}
+
+#define ROBODIFF_DDS_CODEC(Message)                                                 \
+  template void toWire(const rpc::Message& in, robodiff_wire_##Message& out);       \
+  template void fromWire(const robodiff_wire_##Message& in, rpc::Message& out);
+ROBODIFF_RPC_MESSAGES(ROBODIFF_DDS_CODEC)
+#undef ROBODIFF_DDS_CODEC
 
 // ---- headers -------------------------------------------------------------------------
 
-void toWire(const rpc::RequestHeader& h, robodiff_wire_RequestHeader& out) {
-  out.schema_version.major = h.schema_version.major;
-  out.schema_version.minor = h.schema_version.minor;
-  out.client_id = dupString(h.client_id);
-  out.correlation_id = h.correlation_id;
-  out.deadline_budget_ns = h.deadline_budget_ns;
-  out.server_instance_id = dupString(h.server_instance_id);
-}
+void toWire(const rpc::RequestHeader& h, robodiff_wire_RequestHeader& out) { put(h, out); }
+void toWire(const rpc::ReplyHeader& h, robodiff_wire_ReplyHeader& out) { put(h, out); }
 
 rpc::RequestHeader fromWire(const robodiff_wire_RequestHeader& h) {
   rpc::RequestHeader out;
-  out.schema_version = {h.schema_version.major, h.schema_version.minor};
-  out.client_id = toString(h.client_id);
-  out.correlation_id = h.correlation_id;
-  out.deadline_budget_ns = h.deadline_budget_ns;
-  out.server_instance_id = toString(h.server_instance_id);
+  get(h, out);
   return out;
 }
-
-void toWire(const rpc::ReplyHeader& h, robodiff_wire_ReplyHeader& out) {
-  out.schema_version.major = h.schema_version.major;
-  out.schema_version.minor = h.schema_version.minor;
-  out.server_instance_id = dupString(h.server_instance_id);
-  out.client_id = dupString(h.client_id);
-  out.correlation_id = h.correlation_id;
-  out.status.code = castEnum<robodiff_wire_StatusCode>(h.status.code);
-  out.status.message = dupString(h.status.message);
-}
-
 rpc::ReplyHeader fromWire(const robodiff_wire_ReplyHeader& h) {
   rpc::ReplyHeader out;
-  out.schema_version = {h.schema_version.major, h.schema_version.minor};
-  out.server_instance_id = toString(h.server_instance_id);
-  out.client_id = toString(h.client_id);
-  out.correlation_id = h.correlation_id;
-  out.status.code = statusFromWire(h.status.code);
-  out.status.message = toString(h.status.message);
+  get(h, out);
   return out;
-}
-
-// ---- requests ------------------------------------------------------------------------
-
-void toWire(const rpc::LoadModelRequest& in, robodiff_wire_LoadModelRequest& out) {
-  out.urdf = dupString(in.urdf);
-  out.floating_base = in.floating_base;
-  out.options_json = dupString(in.options_json);
-}
-void fromWire(const robodiff_wire_LoadModelRequest& in, rpc::LoadModelRequest& out) {
-  out.urdf = toString(in.urdf);
-  out.floating_base = in.floating_base;
-  out.options_json = toString(in.options_json);
-}
-
-void toWire(const rpc::GetFunctionRequest& in, robodiff_wire_GetFunctionRequest& out) {
-  out.model_id = dupString(in.model_id);
-  out.spec_json = dupString(in.spec_json);
-  out.wait = in.wait;
-}
-void fromWire(const robodiff_wire_GetFunctionRequest& in, rpc::GetFunctionRequest& out) {
-  out.model_id = toString(in.model_id);
-  out.spec_json = toString(in.spec_json);
-  out.wait = in.wait;
-}
-
-void toWire(const rpc::EvaluateRequest& in, robodiff_wire_EvaluateRequest& out) {
-  out.function_id = dupString(in.function_id);
-  copyToWire(in.inputs, out.inputs);
-}
-void fromWire(const robodiff_wire_EvaluateRequest& in, rpc::EvaluateRequest& out) {
-  out.function_id = toString(in.function_id);
-  copyFromWire(in.inputs, out.inputs);
-}
-
-void toWire(const rpc::EvaluateBatchRequest& in, robodiff_wire_EvaluateBatchRequest& out) {
-  out.function_id = dupString(in.function_id);
-  out.knot_count = in.knot_count;
-  copyToWire(in.inputs, out.inputs);
-}
-void fromWire(const robodiff_wire_EvaluateBatchRequest& in, rpc::EvaluateBatchRequest& out) {
-  out.function_id = toString(in.function_id);
-  out.knot_count = in.knot_count;
-  copyFromWire(in.inputs, out.inputs);
-}
-
-void toWire(const rpc::ListFunctionsRequest& in, robodiff_wire_ListFunctionsRequest& out) {
-  out.model_id = dupString(in.model_id);
-  out.page_size = in.page_size;
-  out.page_token = dupString(in.page_token);
-}
-void fromWire(const robodiff_wire_ListFunctionsRequest& in, rpc::ListFunctionsRequest& out) {
-  out.model_id = toString(in.model_id);
-  out.page_size = in.page_size;
-  out.page_token = toString(in.page_token);
-}
-
-void toWire(const rpc::HealthRequest& in, robodiff_wire_HealthRequest& out) { out.verbose = in.verbose; }
-void fromWire(const robodiff_wire_HealthRequest& in, rpc::HealthRequest& out) { out.verbose = in.verbose; }
-
-void toWire(const rpc::ReleaseRequest& in, robodiff_wire_ReleaseRequest& out) { out.id = dupString(in.id); }
-void fromWire(const robodiff_wire_ReleaseRequest& in, rpc::ReleaseRequest& out) { out.id = toString(in.id); }
-
-// ---- replies -------------------------------------------------------------------------
-
-void toWire(const rpc::LoadModelReply& in, robodiff_wire_LoadModelReply& out) {
-  out.model_id = dupString(in.model_id);
-  stringsToWire(in.joint_names, out.joint_names);
-  stringsToWire(in.frame_names, out.frame_names);
-  out.nq = in.nq;
-  out.nv = in.nv;
-}
-void fromWire(const robodiff_wire_LoadModelReply& in, rpc::LoadModelReply& out) {
-  out.model_id = toString(in.model_id);
-  stringsFromWire(in.joint_names, out.joint_names);
-  stringsFromWire(in.frame_names, out.frame_names);
-  out.nq = in.nq;
-  out.nv = in.nv;
-}
-
-void toWire(const rpc::GetFunctionReply& in, robodiff_wire_GetFunctionReply& out) {
-  out.function_id = dupString(in.function_id);
-  out.state = castEnum<robodiff_wire_FunctionState>(in.state);
-  mapToWire(in.inputs, out.inputs, [](const rpc::InputBlock& b, robodiff_wire_InputBlock& o) {
-    o.name = dupString(b.name);
-    o.size = b.size;
-  });
-  mapToWire(in.outputs, out.outputs, [](const rpc::OutputBlock& b, robodiff_wire_OutputBlock& o) {
-    o.name = dupString(b.name);
-    o.kind = castEnum<robodiff_wire_OutputKind>(b.kind);
-    o.rows = b.rows;
-    o.cols = b.cols;
-    o.layout = castEnum<robodiff_wire_OutputLayout>(b.layout);
-    o.nnz = b.nnz;
-    copyToWire(b.row_offsets, o.row_offsets);
-    copyToWire(b.col_indices, o.col_indices);
-  });
-}
-void fromWire(const robodiff_wire_GetFunctionReply& in, rpc::GetFunctionReply& out) {
-  out.function_id = toString(in.function_id);
-  out.state = castEnum<rpc::FunctionState>(in.state);
-  mapFromWire(in.inputs, out.inputs, [](const robodiff_wire_InputBlock& b, rpc::InputBlock& o) {
-    o.name = toString(b.name);
-    o.size = b.size;
-  });
-  mapFromWire(in.outputs, out.outputs, [](const robodiff_wire_OutputBlock& b, rpc::OutputBlock& o) {
-    o.name = toString(b.name);
-    o.kind = castEnum<rpc::OutputKind>(b.kind);
-    o.rows = b.rows;
-    o.cols = b.cols;
-    o.layout = castEnum<rpc::OutputLayout>(b.layout);
-    o.nnz = b.nnz;
-    copyFromWire(b.row_offsets, o.row_offsets);
-    copyFromWire(b.col_indices, o.col_indices);
-  });
-}
-
-void toWire(const rpc::EvaluateReply& in, robodiff_wire_EvaluateReply& out) { copyToWire(in.outputs, out.outputs); }
-void fromWire(const robodiff_wire_EvaluateReply& in, rpc::EvaluateReply& out) { copyFromWire(in.outputs, out.outputs); }
-
-void toWire(const rpc::EvaluateBatchReply& in, robodiff_wire_EvaluateBatchReply& out) {
-  out.chunk_index = in.chunk_index;
-  out.chunk_count = in.chunk_count;
-  out.total_knots = in.total_knots;
-  out.first_knot = in.first_knot;
-  out.knot_count = in.knot_count;
-  copyToWire(in.outputs, out.outputs);
-}
-void fromWire(const robodiff_wire_EvaluateBatchReply& in, rpc::EvaluateBatchReply& out) {
-  out.chunk_index = in.chunk_index;
-  out.chunk_count = in.chunk_count;
-  out.total_knots = in.total_knots;
-  out.first_knot = in.first_knot;
-  out.knot_count = in.knot_count;
-  copyFromWire(in.outputs, out.outputs);
-}
-
-void toWire(const rpc::ListFunctionsReply& in, robodiff_wire_ListFunctionsReply& out) {
-  mapToWire(in.functions, out.functions, [](const rpc::FunctionSummary& f, robodiff_wire_FunctionSummary& o) {
-    o.function_id = dupString(f.function_id);
-    o.model_id = dupString(f.model_id);
-    o.function_name = dupString(f.function_name);
-    o.state = castEnum<robodiff_wire_FunctionState>(f.state);
-    o.compiled = f.compiled;
-    o.evaluations = f.evaluations;
-    o.message = dupString(f.message);
-  });
-  out.next_page_token = dupString(in.next_page_token);
-  out.total = in.total;
-}
-void fromWire(const robodiff_wire_ListFunctionsReply& in, rpc::ListFunctionsReply& out) {
-  mapFromWire(in.functions, out.functions, [](const robodiff_wire_FunctionSummary& f, rpc::FunctionSummary& o) {
-    o.function_id = toString(f.function_id);
-    o.model_id = toString(f.model_id);
-    o.function_name = toString(f.function_name);
-    o.state = castEnum<rpc::FunctionState>(f.state);
-    o.compiled = f.compiled;
-    o.evaluations = f.evaluations;
-    o.message = toString(f.message);
-  });
-  out.next_page_token = toString(in.next_page_token);
-  out.total = in.total;
-}
-
-void toWire(const rpc::HealthReply& in, robodiff_wire_HealthReply& out) {
-  out.state = castEnum<robodiff_wire_ServingState>(in.state);
-  out.version = dupString(in.version);
-  out.server_instance_id = dupString(in.server_instance_id);
-  out.uptime_ns = in.uptime_ns;
-  out.models_loaded = in.models_loaded;
-  out.functions_loaded = in.functions_loaded;
-  out.functions_compiled = in.functions_compiled;
-  out.builds_queued = in.builds_queued;
-  out.builds_running = in.builds_running;
-  out.builds_failed = in.builds_failed;
-  out.builds_done = in.builds_done;
-  out.cache_hits = in.cache_hits;
-  out.cache_misses = in.cache_misses;
-  out.cache_bytes = in.cache_bytes;
-  out.cache_entries = in.cache_entries;
-  out.workers_total = in.workers_total;
-  out.workers_busy = in.workers_busy;
-  out.queue_depth = in.queue_depth;
-  out.queue_capacity = in.queue_capacity;
-  out.batch_threads = in.batch_threads;
-  mapToWire(in.methods, out.methods, [](const rpc::MethodStats& m, robodiff_wire_MethodStats& o) {
-    o.method = castEnum<robodiff_wire_Method>(m.method);
-    o.requests = m.requests;
-    o.errors = m.errors;
-    o.p50_ns = m.p50_ns;
-    o.p90_ns = m.p90_ns;
-    o.p99_ns = m.p99_ns;
-    o.max_ns = m.max_ns;
-  });
-  mapToWire(in.errors, out.errors, [](const rpc::StatusCount& c, robodiff_wire_StatusCount& o) {
-    o.code = castEnum<robodiff_wire_StatusCode>(c.code);
-    o.count = c.count;
-  });
-  mapToWire(in.transports, out.transports, [](const rpc::TransportCounts& t, robodiff_wire_TransportCounts& o) {
-    o.transport = dupString(t.transport);
-    o.requests = t.requests;
-    o.errors = t.errors;
-  });
-}
-void fromWire(const robodiff_wire_HealthReply& in, rpc::HealthReply& out) {
-  out.state = castEnum<rpc::ServingState>(in.state);
-  out.version = toString(in.version);
-  out.server_instance_id = toString(in.server_instance_id);
-  out.uptime_ns = in.uptime_ns;
-  out.models_loaded = in.models_loaded;
-  out.functions_loaded = in.functions_loaded;
-  out.functions_compiled = in.functions_compiled;
-  out.builds_queued = in.builds_queued;
-  out.builds_running = in.builds_running;
-  out.builds_failed = in.builds_failed;
-  out.builds_done = in.builds_done;
-  out.cache_hits = in.cache_hits;
-  out.cache_misses = in.cache_misses;
-  out.cache_bytes = in.cache_bytes;
-  out.cache_entries = in.cache_entries;
-  out.workers_total = in.workers_total;
-  out.workers_busy = in.workers_busy;
-  out.queue_depth = in.queue_depth;
-  out.queue_capacity = in.queue_capacity;
-  out.batch_threads = in.batch_threads;
-  mapFromWire(in.methods, out.methods, [](const robodiff_wire_MethodStats& m, rpc::MethodStats& o) {
-    o.method = castEnum<rpc::Method>(m.method);
-    o.requests = m.requests;
-    o.errors = m.errors;
-    o.p50_ns = m.p50_ns;
-    o.p90_ns = m.p90_ns;
-    o.p99_ns = m.p99_ns;
-    o.max_ns = m.max_ns;
-  });
-  mapFromWire(in.errors, out.errors, [](const robodiff_wire_StatusCount& c, rpc::StatusCount& o) {
-    o.code = statusFromWire(c.code);
-    o.count = c.count;
-  });
-  mapFromWire(in.transports, out.transports, [](const robodiff_wire_TransportCounts& t, rpc::TransportCounts& o) {
-    o.transport = toString(t.transport);
-    o.requests = t.requests;
-    o.errors = t.errors;
-  });
-}
-
-void toWire(const rpc::ReleaseReply& in, robodiff_wire_ReleaseReply& out) { out.references_left = in.references_left; }
-void fromWire(const robodiff_wire_ReleaseReply& in, rpc::ReleaseReply& out) { out.references_left = in.references_left; }
-
-// ---- jobs -------------------------------------------------------------------------------
-
-namespace {
-
-void jobInfoToWire(const rpc::JobInfo& in, robodiff_wire_JobInfo& out) {
-  out.job_id = dupString(in.job_id);
-  out.kind = dupString(in.kind);
-  out.state = castEnum<robodiff_wire_JobState>(in.state);
-  out.progress = in.progress;
-  out.elapsed_seconds = in.elapsed_seconds;
-  out.eta_seconds = in.eta_seconds;
-  stringsToWire(in.messages, out.messages);
-  out.error = dupString(in.error);
-}
-
-void jobInfoFromWire(const robodiff_wire_JobInfo& in, rpc::JobInfo& out) {
-  out.job_id = toString(in.job_id);
-  out.kind = toString(in.kind);
-  out.state = castEnum<rpc::JobState>(in.state);
-  out.progress = in.progress;
-  out.elapsed_seconds = in.elapsed_seconds;
-  out.eta_seconds = in.eta_seconds;
-  stringsFromWire(in.messages, out.messages);
-  out.error = toString(in.error);
-}
-
-}  // namespace
-
-void toWire(const rpc::SubmitJobRequest& in, robodiff_wire_SubmitJobRequest& out) {
-  out.kind = dupString(in.kind);
-  out.params_json = dupString(in.params_json);
-}
-void fromWire(const robodiff_wire_SubmitJobRequest& in, rpc::SubmitJobRequest& out) {
-  out.kind = toString(in.kind);
-  out.params_json = toString(in.params_json);
-}
-void toWire(const rpc::JobStatusRequest& in, robodiff_wire_JobStatusRequest& out) { out.job_id = dupString(in.job_id); }
-void fromWire(const robodiff_wire_JobStatusRequest& in, rpc::JobStatusRequest& out) { out.job_id = toString(in.job_id); }
-void toWire(const rpc::CancelJobRequest& in, robodiff_wire_CancelJobRequest& out) { out.job_id = dupString(in.job_id); }
-void fromWire(const robodiff_wire_CancelJobRequest& in, rpc::CancelJobRequest& out) { out.job_id = toString(in.job_id); }
-void toWire(const rpc::JobResultRequest& in, robodiff_wire_JobResultRequest& out) { out.job_id = dupString(in.job_id); }
-void fromWire(const robodiff_wire_JobResultRequest& in, rpc::JobResultRequest& out) { out.job_id = toString(in.job_id); }
-
-void toWire(const rpc::SubmitJobReply& in, robodiff_wire_SubmitJobReply& out) { out.job_id = dupString(in.job_id); }
-void fromWire(const robodiff_wire_SubmitJobReply& in, rpc::SubmitJobReply& out) { out.job_id = toString(in.job_id); }
-void toWire(const rpc::JobStatusReply& in, robodiff_wire_JobStatusReply& out) {
-  mapToWire(in.jobs, out.jobs, jobInfoToWire);
-}
-void fromWire(const robodiff_wire_JobStatusReply& in, rpc::JobStatusReply& out) {
-  mapFromWire(in.jobs, out.jobs, jobInfoFromWire);
-}
-void toWire(const rpc::CancelJobReply& in, robodiff_wire_CancelJobReply& out) {
-  out.state = castEnum<robodiff_wire_JobState>(in.state);
-}
-void fromWire(const robodiff_wire_CancelJobReply& in, rpc::CancelJobReply& out) {
-  out.state = castEnum<rpc::JobState>(in.state);
-}
-void toWire(const rpc::JobResultReply& in, robodiff_wire_JobResultReply& out) {
-  jobInfoToWire(in.info, out.info);
-  out.result_json = dupString(in.result_json);
-  out.result_dir = dupString(in.result_dir);
-}
-void fromWire(const robodiff_wire_JobResultReply& in, rpc::JobResultReply& out) {
-  jobInfoFromWire(in.info, out.info);
-  out.result_json = toString(in.result_json);
-  out.result_dir = toString(in.result_dir);
 }
 
 // ---- envelopes -------------------------------------------------------------------------

@@ -1,8 +1,10 @@
 #pragma once
 // The service's messages in C++: one struct per IDL type of schema/robodiff.idl, with the
-// same fields in the same order. Transports convert between these and their wire form
-// (dds_codec.hpp: the idlc-generated C types; shm_codec.hpp: flat shared-memory chunks);
-// the server and the client work only with these.
+// same fields in the same order, each followed by its field list (field_list.hpp), from
+// which both transports' codecs are derived (dds_codec.hpp: the idlc-generated C types;
+// shm_codec.hpp: flat shared-memory chunks); the server and the client work only with
+// these. Adding a field: the struct, its ROBODIFF_FIELDS line and robodiff.idl (a test
+// checks that the IDL and these lists agree).
 //
 // Evaluate and EvaluateBatch carry their doubles outside these structs (spans over the
 // transport's buffers) so that iceoryx can serve them without copying the payload; see
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "robodiff/schema/field_list.hpp"
 #include "robodiff/schema/status.hpp"
 
 namespace robodiff::rpc {
@@ -32,10 +35,17 @@ enum class Method : std::uint32_t {  // robodiff_wire_Method
 inline constexpr std::uint32_t kMethodCount = 11;
 const char* toString(Method method);  // "LoadModel", ...
 
+// valueCount(e): how many values an enum has (the codecs refuse others off the wire).
+constexpr std::uint32_t valueCount(Method) { return kMethodCount; }
+constexpr std::uint32_t valueCount(StatusCode) { return kStatusCodeCount; }
+
+ROBODIFF_FIELDS(Status, code, message);
+
 struct SchemaVersion {
   std::uint16_t major = kSchemaVersionMajor;
   std::uint16_t minor = kSchemaVersionMinor;
 };
+ROBODIFF_FIELDS(SchemaVersion, major, minor);
 
 struct RequestHeader {
   SchemaVersion schema_version;
@@ -44,6 +54,7 @@ struct RequestHeader {
   std::uint64_t deadline_budget_ns = 0;  // relative, from when the server takes it; 0 = none
   std::string server_instance_id;      // empty = any server
 };
+ROBODIFF_FIELDS(RequestHeader, schema_version, client_id, correlation_id, deadline_budget_ns, server_instance_id);
 
 struct ReplyHeader {
   SchemaVersion schema_version;        // the server's
@@ -52,6 +63,7 @@ struct ReplyHeader {
   std::uint64_t correlation_id = 0;
   Status status;
 };
+ROBODIFF_FIELDS(ReplyHeader, schema_version, server_instance_id, client_id, correlation_id, status);
 
 // ---- LoadModel ----------------------------------------------------------------------
 
@@ -60,6 +72,7 @@ struct LoadModelRequest {
   bool floating_base = false;
   std::string options_json;            // empty = defaults
 };
+ROBODIFF_FIELDS(LoadModelRequest, urdf, floating_base, options_json);
 
 struct LoadModelReply {
   std::string model_id;                // canonical hash (hex)
@@ -67,6 +80,7 @@ struct LoadModelReply {
   std::vector<std::string> frame_names;
   std::uint32_t nq = 0, nv = 0;
 };
+ROBODIFF_FIELDS(LoadModelReply, model_id, joint_names, frame_names, nq, nv);
 
 // ---- GetFunction --------------------------------------------------------------------
 
@@ -74,11 +88,15 @@ enum class FunctionState : std::uint32_t { Ready = 0, Building = 1, Failed = 2 }
 enum class OutputKind : std::uint32_t { Value = 0, Jacobian = 1, Hessian = 2 };
 enum class OutputLayout : std::uint32_t { DenseRowMajor = 0, SparseCsr = 1 };
 const char* toString(FunctionState state);  // "READY", "BUILDING", "FAILED"
+constexpr std::uint32_t valueCount(FunctionState) { return 3; }
+constexpr std::uint32_t valueCount(OutputKind) { return 3; }
+constexpr std::uint32_t valueCount(OutputLayout) { return 2; }
 
 struct InputBlock {
   std::string name;
   std::uint32_t size = 0;              // doubles
 };
+ROBODIFF_FIELDS(InputBlock, name, size);
 
 struct OutputBlock {
   std::string name;
@@ -89,12 +107,14 @@ struct OutputBlock {
   std::vector<std::uint32_t> row_offsets;  // sparse: rows + 1
   std::vector<std::uint32_t> col_indices;  // sparse: nnz
 };
+ROBODIFF_FIELDS(OutputBlock, name, kind, rows, cols, layout, nnz, row_offsets, col_indices);
 
 struct GetFunctionRequest {
   std::string model_id;
   std::string spec_json;
   bool wait = false;                   // reply when READY / FAILED (or at the deadline)
 };
+ROBODIFF_FIELDS(GetFunctionRequest, model_id, spec_json, wait);
 
 struct GetFunctionReply {
   std::string function_id;
@@ -102,6 +122,7 @@ struct GetFunctionReply {
   std::vector<InputBlock> inputs;      // in evaluation order
   std::vector<OutputBlock> outputs;    // in evaluation order
 };
+ROBODIFF_FIELDS(GetFunctionReply, function_id, state, inputs, outputs);
 
 // Doubles per knot in and out, as the blocks above add up.
 std::uint32_t inputCount(const GetFunctionReply& function);
@@ -113,22 +134,26 @@ struct EvaluateRequest {
   std::string function_id;
   std::vector<double> inputs;          // used where a transport copies (DDS); concatenated blocks
 };
+ROBODIFF_FIELDS(EvaluateRequest, function_id, inputs);
 
 struct EvaluateReply {
   std::vector<double> outputs;
 };
+ROBODIFF_FIELDS(EvaluateReply, outputs);
 
 struct EvaluateBatchRequest {
   std::string function_id;
   std::uint32_t knot_count = 0;
   std::vector<double> inputs;          // knot_count knots, each the concatenated blocks
 };
+ROBODIFF_FIELDS(EvaluateBatchRequest, function_id, knot_count, inputs);
 
 struct EvaluateBatchReply {
   std::uint32_t chunk_index = 0, chunk_count = 1;
   std::uint32_t total_knots = 0, first_knot = 0, knot_count = 0;
   std::vector<double> outputs;
 };
+ROBODIFF_FIELDS(EvaluateBatchReply, chunk_index, chunk_count, total_knots, first_knot, knot_count, outputs);
 
 // ---- ListFunctions ------------------------------------------------------------------
 
@@ -142,6 +167,7 @@ struct ListFunctionsRequest {
   std::uint32_t page_size = 0;         // 0: kMaxListFunctionsPage
   std::string page_token;              // empty: the first page; else an earlier reply's next_page_token
 };
+ROBODIFF_FIELDS(ListFunctionsRequest, model_id, page_size, page_token);
 
 struct FunctionSummary {
   std::string function_id;
@@ -152,12 +178,14 @@ struct FunctionSummary {
   std::uint64_t evaluations = 0;       // knots evaluated
   std::string message;                 // FAILED: why
 };
+ROBODIFF_FIELDS(FunctionSummary, function_id, model_id, function_name, state, compiled, evaluations, message);
 
 struct ListFunctionsReply {
   std::vector<FunctionSummary> functions;  // in order of creation
   std::string next_page_token;         // empty: this was the last page
   std::uint32_t total = 0;             // functions listed over all pages (when this page was made)
 };
+ROBODIFF_FIELDS(ListFunctionsReply, functions, next_page_token, total);
 
 // ---- Release ------------------------------------------------------------------------
 
@@ -166,26 +194,31 @@ struct ListFunctionsReply {
 struct ReleaseRequest {
   std::string id;                      // a model_id or a function_id
 };
+ROBODIFF_FIELDS(ReleaseRequest, id);
 
 struct ReleaseReply {
   std::uint32_t references_left = 0;
 };
+ROBODIFF_FIELDS(ReleaseReply, references_left);
 
 // ---- Jobs ---------------------------------------------------------------------------
 
 // Batch work in worker processes (schema/README.md: the kinds and their JSON).
 enum class JobState : std::uint32_t { Queued = 0, Running = 1, Succeeded = 2, Failed = 3, Cancelled = 4 };
 const char* toString(JobState state);  // "QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"
+constexpr std::uint32_t valueCount(JobState) { return 5; }
 inline bool isFinal(JobState s) { return s != JobState::Queued && s != JobState::Running; }
 
 struct SubmitJobRequest {
   std::string kind;                    // "trajectory", "identify", "trajopt"
   std::string params_json;             // a JSON object
 };
+ROBODIFF_FIELDS(SubmitJobRequest, kind, params_json);
 
 struct SubmitJobReply {
   std::string job_id;
 };
+ROBODIFF_FIELDS(SubmitJobReply, job_id);
 
 struct JobInfo {
   std::string job_id;
@@ -197,41 +230,50 @@ struct JobInfo {
   std::vector<std::string> messages;   // the latest few, oldest first
   std::string error;                   // FAILED / CANCELLED: why
 };
+ROBODIFF_FIELDS(JobInfo, job_id, kind, state, progress, elapsed_seconds, eta_seconds, messages, error);
 
 struct JobStatusRequest {
   std::string job_id;                  // empty = every job
 };
+ROBODIFF_FIELDS(JobStatusRequest, job_id);
 
 struct JobStatusReply {
   std::vector<JobInfo> jobs;
 };
+ROBODIFF_FIELDS(JobStatusReply, jobs);
 
 struct CancelJobRequest {
   std::string job_id;
 };
+ROBODIFF_FIELDS(CancelJobRequest, job_id);
 
 struct CancelJobReply {
   JobState state = JobState::Cancelled;
 };
+ROBODIFF_FIELDS(CancelJobReply, state);
 
 struct JobResultRequest {
   std::string job_id;
 };
+ROBODIFF_FIELDS(JobResultRequest, job_id);
 
 struct JobResultReply {
   JobInfo info;
   std::string result_json;             // the job's result summary
   std::string result_dir;              // its files, on the server's host
 };
+ROBODIFF_FIELDS(JobResultReply, info, result_json, result_dir);
 
 // ---- Health -------------------------------------------------------------------------
 
 enum class ServingState : std::uint32_t { Starting = 0, Serving = 1, Draining = 2 };
 const char* toString(ServingState state);  // "STARTING", "SERVING", "DRAINING"
+constexpr std::uint32_t valueCount(ServingState) { return 3; }
 
 struct HealthRequest {
   bool verbose = false;
 };
+ROBODIFF_FIELDS(HealthRequest, verbose);
 
 struct MethodStats {
   Method method = Method::Health;
@@ -239,17 +281,20 @@ struct MethodStats {
   std::uint64_t errors = 0;            // non-OK replies
   std::uint64_t p50_ns = 0, p90_ns = 0, p99_ns = 0, max_ns = 0;  // server-side latency
 };
+ROBODIFF_FIELDS(MethodStats, method, requests, errors, p50_ns, p90_ns, p99_ns, max_ns);
 
 struct StatusCount {
   StatusCode code = StatusCode::Ok;
   std::uint64_t count = 0;
 };
+ROBODIFF_FIELDS(StatusCount, code, count);
 
 struct TransportCounts {
   std::string transport;               // "iceoryx", "dds"
   std::uint64_t requests = 0;
   std::uint64_t errors = 0;
 };
+ROBODIFF_FIELDS(TransportCounts, transport, requests, errors);
 
 struct HealthReply {
   ServingState state = ServingState::Starting;
@@ -269,5 +314,19 @@ struct HealthReply {
   std::vector<StatusCount> errors;     // non-OK codes seen, with counts
   std::vector<TransportCounts> transports;
 };
+ROBODIFF_FIELDS(HealthReply, state, version, server_instance_id, uptime_ns, models_loaded, functions_loaded,
+                functions_compiled, builds_queued, builds_running, builds_failed, builds_done, cache_hits,
+                cache_misses, cache_bytes, cache_entries, workers_total, workers_busy, queue_depth,
+                queue_capacity, batch_threads, methods, errors, transports);
+
+// Every request and reply, X(Name) each, in Method order (request, then reply): the codecs
+// instantiate themselves and the tests cover every message from this list.
+#define ROBODIFF_RPC_MESSAGES(X)                                        \
+  X(LoadModelRequest) X(LoadModelReply) X(GetFunctionRequest) X(GetFunctionReply)       \
+  X(EvaluateRequest) X(EvaluateReply) X(EvaluateBatchRequest) X(EvaluateBatchReply)     \
+  X(ListFunctionsRequest) X(ListFunctionsReply) X(HealthRequest) X(HealthReply)         \
+  X(ReleaseRequest) X(ReleaseReply) X(SubmitJobRequest) X(SubmitJobReply)               \
+  X(JobStatusRequest) X(JobStatusReply) X(CancelJobRequest) X(CancelJobReply)           \
+  X(JobResultRequest) X(JobResultReply)
 
 }  // namespace robodiff::rpc

@@ -88,53 +88,13 @@ rpc::ReplyHeader fromWire(const robodiff_wire_ReplyHeader& header);
 
 // ---- bodies: every message, both ways -------------------------------------------------
 
-void toWire(const rpc::LoadModelRequest& in, robodiff_wire_LoadModelRequest& out);
-void toWire(const rpc::GetFunctionRequest& in, robodiff_wire_GetFunctionRequest& out);
-void toWire(const rpc::EvaluateRequest& in, robodiff_wire_EvaluateRequest& out);
-void toWire(const rpc::EvaluateBatchRequest& in, robodiff_wire_EvaluateBatchRequest& out);
-void toWire(const rpc::ListFunctionsRequest& in, robodiff_wire_ListFunctionsRequest& out);
-void toWire(const rpc::HealthRequest& in, robodiff_wire_HealthRequest& out);
-void toWire(const rpc::ReleaseRequest& in, robodiff_wire_ReleaseRequest& out);
-void toWire(const rpc::SubmitJobRequest& in, robodiff_wire_SubmitJobRequest& out);
-void toWire(const rpc::JobStatusRequest& in, robodiff_wire_JobStatusRequest& out);
-void toWire(const rpc::CancelJobRequest& in, robodiff_wire_CancelJobRequest& out);
-void toWire(const rpc::JobResultRequest& in, robodiff_wire_JobResultRequest& out);
-
-void toWire(const rpc::LoadModelReply& in, robodiff_wire_LoadModelReply& out);
-void toWire(const rpc::GetFunctionReply& in, robodiff_wire_GetFunctionReply& out);
-void toWire(const rpc::EvaluateReply& in, robodiff_wire_EvaluateReply& out);
-void toWire(const rpc::EvaluateBatchReply& in, robodiff_wire_EvaluateBatchReply& out);
-void toWire(const rpc::ListFunctionsReply& in, robodiff_wire_ListFunctionsReply& out);
-void toWire(const rpc::HealthReply& in, robodiff_wire_HealthReply& out);
-void toWire(const rpc::ReleaseReply& in, robodiff_wire_ReleaseReply& out);
-void toWire(const rpc::SubmitJobReply& in, robodiff_wire_SubmitJobReply& out);
-void toWire(const rpc::JobStatusReply& in, robodiff_wire_JobStatusReply& out);
-void toWire(const rpc::CancelJobReply& in, robodiff_wire_CancelJobReply& out);
-void toWire(const rpc::JobResultReply& in, robodiff_wire_JobResultReply& out);
-
-void fromWire(const robodiff_wire_LoadModelRequest& in, rpc::LoadModelRequest& out);
-void fromWire(const robodiff_wire_GetFunctionRequest& in, rpc::GetFunctionRequest& out);
-void fromWire(const robodiff_wire_EvaluateRequest& in, rpc::EvaluateRequest& out);
-void fromWire(const robodiff_wire_EvaluateBatchRequest& in, rpc::EvaluateBatchRequest& out);
-void fromWire(const robodiff_wire_ListFunctionsRequest& in, rpc::ListFunctionsRequest& out);
-void fromWire(const robodiff_wire_HealthRequest& in, rpc::HealthRequest& out);
-void fromWire(const robodiff_wire_ReleaseRequest& in, rpc::ReleaseRequest& out);
-void fromWire(const robodiff_wire_SubmitJobRequest& in, rpc::SubmitJobRequest& out);
-void fromWire(const robodiff_wire_JobStatusRequest& in, rpc::JobStatusRequest& out);
-void fromWire(const robodiff_wire_CancelJobRequest& in, rpc::CancelJobRequest& out);
-void fromWire(const robodiff_wire_JobResultRequest& in, rpc::JobResultRequest& out);
-
-void fromWire(const robodiff_wire_LoadModelReply& in, rpc::LoadModelReply& out);
-void fromWire(const robodiff_wire_GetFunctionReply& in, rpc::GetFunctionReply& out);
-void fromWire(const robodiff_wire_EvaluateReply& in, rpc::EvaluateReply& out);
-void fromWire(const robodiff_wire_EvaluateBatchReply& in, rpc::EvaluateBatchReply& out);
-void fromWire(const robodiff_wire_ListFunctionsReply& in, rpc::ListFunctionsReply& out);
-void fromWire(const robodiff_wire_HealthReply& in, rpc::HealthReply& out);
-void fromWire(const robodiff_wire_ReleaseReply& in, rpc::ReleaseReply& out);
-void fromWire(const robodiff_wire_SubmitJobReply& in, rpc::SubmitJobReply& out);
-void fromWire(const robodiff_wire_JobStatusReply& in, rpc::JobStatusReply& out);
-void fromWire(const robodiff_wire_CancelJobReply& in, rpc::CancelJobReply& out);
-void fromWire(const robodiff_wire_JobResultReply& in, rpc::JobResultReply& out);
+// Each message of ROBODIFF_RPC_MESSAGES (messages.hpp) to and from its idlc type
+// (robodiff_wire_<Name>), field by field as its field list says; nested structs,
+// sequences, strings and enums alike. Instantiated for those pairs only.
+template <class Message, class Wire>
+void toWire(const Message& in, Wire& out);
+template <class Wire, class Message>
+void fromWire(const Wire& in, Message& out);
 
 // ---- envelopes -------------------------------------------------------------------------
 

@@ -151,55 +151,15 @@ struct EvaluateReplyView {
 Status decodeEvaluateRequest(std::span<const std::byte> body, EvaluateRequestView& view);
 Status decodeEvaluateReply(std::span<const std::byte> body, EvaluateReplyView& view);
 
-// ---- the compact bodies of the other methods ---------------------------------------------
+// ---- whole messages -------------------------------------------------------------------
 
-std::vector<std::byte> encode(const rpc::LoadModelRequest& message);
-std::vector<std::byte> encode(const rpc::LoadModelReply& message);
-std::vector<std::byte> encode(const rpc::GetFunctionRequest& message);
-std::vector<std::byte> encode(const rpc::GetFunctionReply& message);
-std::vector<std::byte> encode(const rpc::ListFunctionsRequest& message);
-std::vector<std::byte> encode(const rpc::ListFunctionsReply& message);
-std::vector<std::byte> encode(const rpc::HealthRequest& message);
-std::vector<std::byte> encode(const rpc::HealthReply& message);
-std::vector<std::byte> encode(const rpc::ReleaseRequest& message);
-std::vector<std::byte> encode(const rpc::ReleaseReply& message);
-std::vector<std::byte> encode(const rpc::SubmitJobRequest& message);
-std::vector<std::byte> encode(const rpc::SubmitJobReply& message);
-std::vector<std::byte> encode(const rpc::JobStatusRequest& message);
-std::vector<std::byte> encode(const rpc::JobStatusReply& message);
-std::vector<std::byte> encode(const rpc::CancelJobRequest& message);
-std::vector<std::byte> encode(const rpc::CancelJobReply& message);
-std::vector<std::byte> encode(const rpc::JobResultRequest& message);
-std::vector<std::byte> encode(const rpc::JobResultReply& message);
-
-Status decode(std::span<const std::byte> body, rpc::LoadModelRequest& message);
-Status decode(std::span<const std::byte> body, rpc::LoadModelReply& message);
-Status decode(std::span<const std::byte> body, rpc::GetFunctionRequest& message);
-Status decode(std::span<const std::byte> body, rpc::GetFunctionReply& message);
-Status decode(std::span<const std::byte> body, rpc::ListFunctionsRequest& message);
-Status decode(std::span<const std::byte> body, rpc::ListFunctionsReply& message);
-Status decode(std::span<const std::byte> body, rpc::HealthRequest& message);
-Status decode(std::span<const std::byte> body, rpc::HealthReply& message);
-Status decode(std::span<const std::byte> body, rpc::ReleaseRequest& message);
-Status decode(std::span<const std::byte> body, rpc::ReleaseReply& message);
-Status decode(std::span<const std::byte> body, rpc::SubmitJobRequest& message);
-Status decode(std::span<const std::byte> body, rpc::SubmitJobReply& message);
-Status decode(std::span<const std::byte> body, rpc::JobStatusRequest& message);
-Status decode(std::span<const std::byte> body, rpc::JobStatusReply& message);
-Status decode(std::span<const std::byte> body, rpc::CancelJobRequest& message);
-Status decode(std::span<const std::byte> body, rpc::CancelJobReply& message);
-Status decode(std::span<const std::byte> body, rpc::JobResultRequest& message);
-Status decode(std::span<const std::byte> body, rpc::JobResultReply& message);
-
-// Whole-message forms of the Evaluate bodies (copies; for tests and tools; the transport
-// uses the views above). The vectors' storage is 8-byte aligned (operator new).
-std::vector<std::byte> encode(const rpc::EvaluateRequest& message);
-std::vector<std::byte> encode(const rpc::EvaluateBatchRequest& message);
-std::vector<std::byte> encode(const rpc::EvaluateReply& message);
-std::vector<std::byte> encode(const rpc::EvaluateBatchReply& message);
-Status decode(std::span<const std::byte> body, rpc::EvaluateRequest& message);
-Status decode(std::span<const std::byte> body, rpc::EvaluateBatchRequest& message);
-Status decode(std::span<const std::byte> body, rpc::EvaluateReply& message);
-Status decode(std::span<const std::byte> body, rpc::EvaluateBatchReply& message);
+// encode(message) / decode(body, message) for every message of ROBODIFF_RPC_MESSAGES
+// (messages.hpp). The Evaluate ones take the layout above (copies, for tests and tools:
+// the transport uses the views; the vectors' storage is 8-byte aligned); the others are
+// encoded compactly, field by field as their field lists say (compact_body.hpp).
+template <class Message>
+std::vector<std::byte> encode(const Message& message);
+template <class Message>
+Status decode(std::span<const std::byte> body, Message& message);
 
 }  // namespace robodiff::shm
