@@ -149,7 +149,7 @@ void openCompiled(BatchFunction::Impl& impl, const Model& model, const std::stri
     workers::CachedBuilder builder(cache, pool, builder_options);
     workers::BuildTarget target{"<urdf>", floating_base, "<spec>", ""};
     target.urdf_text = urdf_text;
-    target.spec_text = normalizedSpecJson(spec);
+    target.spec_text = specJson(spec);  // a user spec's normalised JSON is a key, not a spec
     const std::vector<workers::BuildStatus> done = builder.buildAll({target});
     if (done.at(0).state == workers::BuildState::Failed)
       throw std::runtime_error("building " + spec.functionName() + " for " + model.name +

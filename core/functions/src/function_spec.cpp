@@ -9,6 +9,7 @@
 
 #include "robodiff/language/bounded_text.hpp"
 #include "user_function_canonical.hpp"
+#include "user_function_json.hpp"
 #include "user_function_parse.hpp"
 #include "robodiff/language/json_problem.hpp"
 
@@ -349,6 +350,10 @@ std::string normalizedSpecJson(const FunctionSpec& spec) {
                 {"march_native", spec.build.march_native},
                 {"fast_math", spec.build.fast_math}};
   return j.dump();
+}
+
+std::string specJson(const FunctionSpec& spec) {
+  return spec.user ? detail::userFunctionSpecJson(spec) : normalizedSpecJson(spec);
 }
 
 }  // namespace robodiff

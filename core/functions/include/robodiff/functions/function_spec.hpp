@@ -102,6 +102,13 @@ FunctionSpec loadFunctionSpec(const std::string& path);
 // meaning; equal for specs that build the same function (part of the cache key).
 std::string normalizedSpecJson(const FunctionSpec& spec);
 
+// A JSON text of the spec that parseFunctionSpec reads back to the same function (equal
+// normalizedSpecJson): what is sent to a process that builds it (a robodiff-worker). A
+// model function's is its normalised JSON; a user function's normalised JSON is a key
+// (defines inlined into terms), so its is the function as parsed: name, inputs, shapes,
+// defines, outputs and build options (descriptions left out).
+std::string specJson(const FunctionSpec& spec);
+
 const char* toString(ModelFunction f);
 const char* toString(OutputKind k);
 
