@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using testing::TempDir;
 
 // Publishes a made-up library of `bytes` bytes whose content depends on `name`.
-Artifact build(Cache& cache, const TempDir& tmp, const std::string& name, std::size_t bytes = 4096) {
+Artifact healingBuild(Cache& cache, const TempDir& tmp, const std::string& name, std::size_t bytes = 4096) {
   std::string library(bytes, '\0');
   for (std::size_t i = 0; i < bytes; ++i) library[i] = static_cast<char>((i * 131 + name.size() * 7 + name[0]) & 0xff);
   ArtifactFiles f;
@@ -57,7 +57,7 @@ void expectQuarantinedAndRebuildable(Cache& cache, const TempDir& tmp, const std
   EXPECT_NE(log.find(reason), std::string::npos) << log;
   EXPECT_NE(quarantineReasons(cache.dir()).find(reason), std::string::npos);
   EXPECT_FALSE(cache.entry(keyOf(name)));
-  const Artifact rebuilt = build(cache, tmp, name);
+  const Artifact rebuilt = healingBuild(cache, tmp, name);
   EXPECT_EQ(testing::readFile(rebuilt.library()), testing::readFile(tmp / (name + ".so")));
   EXPECT_TRUE(cache.find(keyOf(name)));
 }
@@ -65,7 +65,7 @@ void expectQuarantinedAndRebuildable(Cache& cache, const TempDir& tmp, const std
 TEST(CacheSelfHealing, AMissingLibraryIsQuarantinedAndRebuilt) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");
-  fs::remove(build(cache, tmp, "rnea").library());
+  fs::remove(healingBuild(cache, tmp, "rnea").library());
   expectQuarantinedAndRebuildable(cache, tmp, "rnea", "library.so is missing");
   EXPECT_EQ(cache.stats().quarantined, 1u);
 }
@@ -73,7 +73,7 @@ TEST(CacheSelfHealing, AMissingLibraryIsQuarantinedAndRebuilt) {
 TEST(CacheSelfHealing, AMissingObjectDirectoryIsRecordedAndRebuilt) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");
-  fs::remove_all(build(cache, tmp, "aba").dir());
+  fs::remove_all(healingBuild(cache, tmp, "aba").dir());
   expectQuarantinedAndRebuildable(cache, tmp, "aba", "is missing");
   EXPECT_EQ(cache.stats().quarantined, 1u);
 }
@@ -81,21 +81,21 @@ TEST(CacheSelfHealing, AMissingObjectDirectoryIsRecordedAndRebuilt) {
 TEST(CacheSelfHealing, TruncatedReplacedAndLinkedLibrariesAreQuarantinedAndRebuilt) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");
-  const Artifact other = build(cache, tmp, "other");
+  const Artifact other = healingBuild(cache, tmp, "other");
 
-  const fs::path truncated = build(cache, tmp, "crba").library();
+  const fs::path truncated = healingBuild(cache, tmp, "crba").library();
   ::chmod(truncated.c_str(), 0700);
   fs::resize_file(truncated, 1000);
   expectQuarantinedAndRebuildable(cache, tmp, "crba", "truncated or replaced");
 
   // Another entry's library, same size, in its place.
-  const fs::path replaced = build(cache, tmp, "minv").library();
+  const fs::path replaced = healingBuild(cache, tmp, "minv").library();
   ::chmod(replaced.c_str(), 0700);
   fs::remove(replaced);
   fs::copy_file(other.library(), replaced);
   expectQuarantinedAndRebuildable(cache, tmp, "minv", "SHA-256 mismatch");
 
-  const fs::path linked = build(cache, tmp, "fk").library();
+  const fs::path linked = healingBuild(cache, tmp, "fk").library();
   fs::remove(linked);
   fs::create_symlink(other.library(), linked);
   expectQuarantinedAndRebuildable(cache, tmp, "fk", "symbolic link");
@@ -107,7 +107,7 @@ TEST(CacheSelfHealing, TruncatedReplacedAndLinkedLibrariesAreQuarantinedAndRebui
 TEST(CacheSelfHealing, AClaimOnAnEntryWhoseLibraryIsGoneIsGrantedForTheRebuild) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");
-  fs::remove(build(cache, tmp, "rnea").library());
+  fs::remove(healingBuild(cache, tmp, "rnea").library());
   ::testing::internal::CaptureStderr();
   const ClaimResult r = cache.claim(keyOf("rnea"), infoFor("rnea"));
   ::testing::internal::GetCapturedStderr();
@@ -117,7 +117,7 @@ TEST(CacheSelfHealing, AClaimOnAnEntryWhoseLibraryIsGoneIsGrantedForTheRebuild) 
 TEST(CacheSelfHealing, EveryPublishedEntryCarriesItsRowInEntryJson) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");
-  const Artifact a = build(cache, tmp, "rnea");
+  const Artifact a = healingBuild(cache, tmp, "rnea");
   const nlohmann::json j = nlohmann::json::parse(testing::readFile(a.dir() / "entry.json"));
   EXPECT_EQ(j["key"], keyOf("rnea"));
   EXPECT_EQ(j["library_sha256"], a.entry().library_sha256);
@@ -136,7 +136,7 @@ TEST(CacheSelfHealing, RepairRecreatesALostIndexAndQuarantinesWhatCannotBeVerifi
   std::map<std::string, Entry> before;
   {
     Cache cache = Cache::open(tmp / "cache");
-    for (const char* name : {"rnea", "aba", "crba", "bad", "nometa"}) before[name] = build(cache, tmp, name).entry();
+    for (const char* name : {"rnea", "aba", "crba", "bad", "nometa"}) before[name] = healingBuild(cache, tmp, name).entry();
   }
   deleteIndex(tmp / "cache");
   const fs::path bad = tmp / "cache" / "objects" / keyOf("bad").substr(0, 2) / keyOf("bad") / "library.so";
@@ -183,8 +183,8 @@ TEST(CacheSelfHealing, OpeningACacheWhoseIndexIsGoneOrEmptyRepairsIt) {
   TempDir tmp;
   {
     Cache cache = Cache::open(tmp / "cache");
-    build(cache, tmp, "rnea");
-    build(cache, tmp, "aba");
+    healingBuild(cache, tmp, "rnea");
+    healingBuild(cache, tmp, "aba");
   }
   deleteIndex(tmp / "cache");
   {

@@ -25,15 +25,15 @@ using testing::runCommand;
 using testing::shellQuote;
 namespace fs = std::filesystem;
 
-std::string arm7() { return shellQuote((testing::sourceDir() / "examples/robots/arm7.urdf").string()); }
+std::string cacheArm7() { return shellQuote((testing::sourceDir() / "examples/robots/arm7.urdf").string()); }
 
-struct Workspace : testing::CacheWorkspace {
+struct ComputeWorkspace : testing::CacheWorkspace {
   // `compute --backend generated` of `spec` at a random state, with this workspace's
   // logging compiler, on its cache unless `extra` has --no-cache.
   testing::ProcessResult compute(const fs::path& spec, const std::string& extra = "") const {
     const bool no_cache = extra.find("--no-cache") != std::string::npos;
     const std::string cache_option = no_cache ? "" : " --cache " + shellQuote(cache.string());
-    return runCommand(cli("compute --urdf " + arm7() + " --spec " + shellQuote(spec.string()) +
+    return runCommand(cli("compute --urdf " + cacheArm7() + " --spec " + shellQuote(spec.string()) +
                           " --derivatives --backend generated --random-state 5 --compiler " + shellQuote(cc.string()) +
                           cache_option + " " + extra));
   }
@@ -75,7 +75,7 @@ fs::path onlyLibrary(const fs::path& cache) {
 }
 
 TEST(ComputeCacheCli, TheSecondCallLoadsTheCachedLibraryAndGivesTheSameNumbers) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path spec = w.spec("rnea_jacobian");
   const testing::ProcessResult first = w.compute(spec);
   ASSERT_EQ(first.exit_code, 0) << first.err;
@@ -101,10 +101,10 @@ TEST(ComputeCacheCli, TheSecondCallLoadsTheCachedLibraryAndGivesTheSameNumbers) 
 }
 
 TEST(ComputeCacheCli, FindsWhatWarmupBuiltUnderTheSameKey) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path spec = w.spec("rnea_jacobian");
   const testing::ProcessResult warmup =
-      runCommand(cli("warmup --urdf " + arm7() + " --spec " + shellQuote(spec.string()) + " --cache " +
+      runCommand(cli("warmup --urdf " + cacheArm7() + " --spec " + shellQuote(spec.string()) + " --cache " +
                      shellQuote(w.cache.string()) + " --compiler " + shellQuote(w.cc.string())));
   ASSERT_EQ(warmup.exit_code, 0) << warmup.out << warmup.err;
   ASSERT_EQ(w.builds(), 1u);
@@ -113,7 +113,7 @@ TEST(ComputeCacheCli, FindsWhatWarmupBuiltUnderTheSameKey) {
 }
 
 TEST(ComputeCacheCli, NoCacheCompilesAndLeavesTheCacheAlone) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path spec = w.spec("rnea_jacobian");
   // No cache yet: --no-cache compiles (into a temporary directory) and makes none.
   const json uncached = w.computed(spec, "--no-cache");
@@ -138,7 +138,7 @@ TEST(ComputeCacheCli, NoCacheCompilesAndLeavesTheCacheAlone) {
 }
 
 TEST(ComputeCacheCli, ACorruptCachedLibraryIsQuarantinedAndRebuiltNotLoaded) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path spec = w.spec("rnea_jacobian");
   const json built = w.computed(spec);
   ASSERT_EQ(built["cache"], "built");
@@ -166,7 +166,7 @@ TEST(ComputeCacheCli, ACorruptCachedLibraryIsQuarantinedAndRebuiltNotLoaded) {
 }
 
 TEST(ComputeCacheCli, AUserFunctionIsCachedToo) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path spec = w.spec("arm7_mpc_knot");
   const json built = w.computed(spec);
   EXPECT_EQ(built["cache"], "built");
@@ -178,10 +178,10 @@ TEST(ComputeCacheCli, AUserFunctionIsCachedToo) {
 }
 
 TEST(ComputeCacheCli, AnUnusableCacheDirectoryIsNamed) {
-  Workspace w;
+  ComputeWorkspace w;
   const fs::path not_a_directory = w.tmp.file("plain-file", "x");
   const testing::ProcessResult r =
-      runCommand(cli("compute --urdf " + arm7() + " --function gravity --backend generated --random-state 1 --cache " +
+      runCommand(cli("compute --urdf " + cacheArm7() + " --function gravity --backend generated --random-state 1 --cache " +
                      shellQuote(not_a_directory.string())));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(not_a_directory.string()), std::string::npos) << r.err;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "support/cache_workspace.hpp"
 #include "support/golden.hpp"
 #include "support/process.hpp"
 #include "support/json_matrix.hpp"
@@ -28,7 +29,7 @@ using testing::matrixOf;
 
 namespace fs = std::filesystem;
 
-std::string cli(const std::string& args) { return shellQuote(cliPath().string()) + " " + args; }
+using testing::cli;
 
 fs::path exampleSpec(const std::string& name) { return testing::sourceDir() / "examples/specs" / (name + ".json"); }
 
@@ -236,14 +237,14 @@ TEST(CheckCli, PrintsATableAndFailsWithStatus2) {
   EXPECT_NE(r.out.find("FAIL"), std::string::npos) << r.out;
 }
 
-struct BadCase {
+struct BadGenerateCase {
   std::string label, spec, extra, expected;
 };
 
 TEST(GenerateCli, ErrorsNameTheProblem) {
   TempDir tmp;
   const fs::path failing_cc = tmp.script("fake-cc", "echo 'fake compiler failure: boom' >&2\nexit 1\n");
-  const std::vector<BadCase> cases = {
+  const std::vector<BadGenerateCase> cases = {
       {"unknown input in wrt", R"({"function": "rnea", "outputs": [{"kind": "jacobian", "wrt": ["q", "x"]}]})", "",
        "outputs[0].wrt[1]"},
       {"unknown build field",
@@ -253,7 +254,7 @@ TEST(GenerateCli, ErrorsNameTheProblem) {
       {"compiler failure", R"({"function": "gravity", "outputs": [{"kind": "value"}]})",
        "--compiler " + shellQuote(failing_cc.string()), "fake compiler failure: boom"},
   };
-  for (const BadCase& c : cases) {
+  for (const BadGenerateCase& c : cases) {
     SCOPED_TRACE(c.label);
     const fs::path out = tmp.path() / "out";
     testing::ProcessResult r =

@@ -45,13 +45,13 @@ constexpr double kDt = 0.01;
 const std::string kQ = "[0.1, -0.4, 0.7, -1.0, 0.3, 0.5, -0.2]", kV = "[0.5, 0.1, -0.3, 0.2, 0.9, -0.6, 0.4]",
                   kU = "[1.0, -2.0, 0.5, 0.3, -0.1, 0.2, 0.05]", kTarget = "[0.3, 0.1, 0.6]";
 
-std::string cli(const std::string& args) { return shellQuote(testing::cliPath().string()) + " " + args; }
+std::string runCli(const std::string& args) { return shellQuote(testing::cliPath().string()) + " " + args; }
 
-std::string arm7() {
+std::string arm7Path() {
   return "--urdf " + shellQuote((testing::sourceDir() / "examples/robots/arm7.urdf").string());
 }
 
-json jsonOf(const std::string& command) {
+json parsedJson(const std::string& command) {
   const testing::ProcessResult r = runCommand(command);
   EXPECT_EQ(r.exit_code, 0) << command << "\n" << r.err;
   return r.exit_code == 0 ? json::parse(r.out) : json::object();
@@ -61,12 +61,12 @@ class UserSpecCli : public ::testing::Test {
  protected:
   // `robodiff compute` of the user spec at the state file.
   json computeUser(const std::string& extra = "") const {
-    return jsonOf(cli("compute " + arm7() + " --spec " + shellQuote(spec_.string()) + " --state " +
+    return parsedJson(runCli("compute " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --state " +
                       shellQuote(state_.string()) + " " + extra));
   }
   // `robodiff compute --function FN` at the same q, v (and tau = u).
   json computeFunction(const std::string& function) const {
-    return jsonOf(cli("compute " + arm7() + " --state " + shellQuote(model_state_.string()) + " --function " +
+    return parsedJson(runCli("compute " + arm7Path() + " --state " + shellQuote(model_state_.string()) + " --function " +
                       function));
   }
 
@@ -93,7 +93,7 @@ TEST_F(UserSpecCli, ComputeStepMatchesAbaCombinedByHand) {
   EXPECT_TRUE(matricesAgree(matrixOf(j["q_next"]), q_ + kDt * v_next, 1e-12));
 
   // dv_next = [dt daba/dq, I + dt daba/dv, dt daba/du].
-  const json aba = jsonOf(cli("compute " + arm7() + " --state " + shellQuote(model_state_.string()) +
+  const json aba = parsedJson(runCli("compute " + arm7Path() + " --state " + shellQuote(model_state_.string()) +
                               " --function aba --derivatives --backend interpreted"));
   Eigen::MatrixXd expected = kDt * matrixOf(aba["jacobian"]);
   expected.block(0, 7, 7, 7) += Eigen::MatrixXd::Identity(7, 7);
@@ -130,14 +130,14 @@ TEST_F(UserSpecCli, ComputeCostMatchesForwardKinematicsAndTheFrameJacobian) {
 }
 
 TEST_F(UserSpecCli, ComputeTablesAndRandomStates) {
-  testing::ProcessResult r = runCommand(cli("compute " + arm7() + " --spec " + shellQuote(spec_.string()) +
+  testing::ProcessResult r = runCommand(runCli("compute " + arm7Path() + " --spec " + shellQuote(spec_.string()) +
                                             " --random-state 4 --format table --backend reference"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* text : {"euler_step of", "random state (seed 4)", "derivatives by central finite differences",
                            "dv_next (jacobian of v_next)", "grad (gradient of cost)", "q:joint1", "target[2]"})
     EXPECT_NE(r.out.find(text), std::string::npos) << text << " in\n" << r.out;
-  const json a = jsonOf(cli("compute " + arm7() + " --spec " + shellQuote(spec_.string()) + " --random-state 4"));
-  const json b = jsonOf(cli("compute " + arm7() + " --spec " + shellQuote(spec_.string()) + " --random-state 4"));
+  const json a = parsedJson(runCli("compute " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --random-state 4"));
+  const json b = parsedJson(runCli("compute " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --random-state 4"));
   EXPECT_EQ(a["v_next"], b["v_next"]);
 }
 
@@ -158,7 +158,7 @@ TEST_F(UserSpecCli, ABadStateFileNamesTheInputAndListsTheExpectedOnes) {
   for (const Case& c : cases) {
     const fs::path state = tmp_.file("bad.json", c.state);
     const testing::ProcessResult r = runCommand(
-        cli("compute " + arm7() + " --spec " + shellQuote(spec_.string()) + " --state " + shellQuote(state.string())));
+        runCli("compute " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --state " + shellQuote(state.string())));
     EXPECT_EQ(r.exit_code, 1) << r.out;
     EXPECT_NE(r.err.find(state.string() + ": " + c.message), std::string::npos) << r.err;
   }
@@ -167,7 +167,7 @@ TEST_F(UserSpecCli, ABadStateFileNamesTheInputAndListsTheExpectedOnes) {
 TEST_F(UserSpecCli, GenerateThenCheckPerOutputAndFailWithStatus2) {
   const fs::path out = tmp_.path() / "out";
   testing::ProcessResult r =
-      runCommand(cli("generate " + arm7() + " --spec " + shellQuote(spec_.string()) + " --out " + shellQuote(out.string())));
+      runCommand(runCli("generate " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --out " + shellQuote(out.string())));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("euler_step (euler_step): q_next 7 x 1, v_next 7 x 1, dv_next 7 x 21"), std::string::npos)
       << r.out;
@@ -176,7 +176,7 @@ TEST_F(UserSpecCli, GenerateThenCheckPerOutputAndFailWithStatus2) {
   EXPECT_EQ(d["inputs"][3]["name"], "target");
   EXPECT_EQ(d["outputs"][4]["name"], "grad");
 
-  const json check = jsonOf(cli("check " + arm7() + " --spec " + shellQuote(spec_.string()) + " --samples 2 --json"));
+  const json check = parsedJson(runCli("check " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --samples 2 --json"));
   EXPECT_EQ(check["pass"], true) << check.dump(2);
   ASSERT_EQ(check["comparisons"].size(), 12u);  // 6 outputs, each vs its reference and the interpreter
   const std::vector<std::pair<std::string, std::string>> rows = {
@@ -195,7 +195,7 @@ TEST_F(UserSpecCli, GenerateThenCheckPerOutputAndFailWithStatus2) {
                   "for a in \"$@\"; do case \"$a\" in *.c) sed -i 's/i0 = in\\[0\\];/i0 = in[1];/' \"$a\";; esac; done\n"
                   "exec cc \"$@\"\n");
   r = runCommand("CC=" + shellQuote(cc.string()) + " " +
-                 cli("check " + arm7() + " --spec " + shellQuote(spec_.string()) + " --samples 2"));
+                 runCli("check " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --samples 2"));
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_NE(r.out.find("FAIL"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("dv_next"), std::string::npos) << r.out;

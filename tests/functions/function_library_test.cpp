@@ -54,7 +54,7 @@ using nlohmann::json;
 using testing::matricesAgree;
 using testing::TempDir;
 
-const Model& arm7() {
+const Model& libraryArm7() {
   static const Model m = loadUrdfFile((testing::sourceDir() / "examples/robots/arm7.urdf").string());
   return m;
 }
@@ -65,7 +65,7 @@ const Model& quadruped() {
   return m;
 }
 
-const Model& robot(const std::string& name) { return name == "arm7" ? arm7() : quadruped(); }
+const Model& robot(const std::string& name) { return name == "arm7" ? libraryArm7() : quadruped(); }
 
 // An example spec (examples/specs/NAME.json), to be compiled at `optimization`.
 FunctionSpec exampleSpec(const std::string& name, const std::string& optimization = "O0") {
@@ -123,7 +123,7 @@ std::vector<Eigen::VectorXd> evaluateCompiled(const Compiled& c, const std::vect
 }
 
 // The runtime inputs without the weights block (the function's own inputs).
-std::vector<Eigen::VectorXd> variableInputs(const BuiltFunction& f, const std::vector<Eigen::VectorXd>& runtime) {
+std::vector<Eigen::VectorXd> libraryVariableInputs(const BuiltFunction& f, const std::vector<Eigen::VectorXd>& runtime) {
   std::vector<Eigen::VectorXd> v;
   for (std::size_t b = 0; b < f.definition.inputs.size(); ++b)
     if (f.definition.inputs[b].name != "weights") v.push_back(runtime[b]);
@@ -163,7 +163,7 @@ TEST_P(CompiledExampleSpecs, CompiledEqualsInterpretedEqualsReference) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const std::vector<Eigen::VectorXd> runtime = randomRuntimeInputs(model, spec, seed);
-    const std::vector<Eigen::VectorXd> all = completeInputs(spec, variableInputs(f, runtime));
+    const std::vector<Eigen::VectorXd> all = completeInputs(spec, libraryVariableInputs(f, runtime));
     const std::vector<Eigen::VectorXd> compiled = evaluateCompiled(c, runtime);
     const std::vector<Eigen::VectorXd> interpreted = evaluateBlocks(interpreter, f.definition, runtime);
     const Eigen::VectorXd value = referenceValue(model, spec, all);
@@ -392,7 +392,7 @@ INSTANTIATE_TEST_SUITE_P(Knots, BatchedEvaluation,
 // 5. A split library computes what the unsplit one does.
 
 TEST(SplitLibrary, ManyPartsGiveTheSameValues) {
-  const Model& model = arm7();
+  const Model& model = libraryArm7();
   const FunctionSpec spec = exampleSpec("rnea_jacobian");
   LibraryOptions split, whole;
   split.codegen.split_threshold = 500;
@@ -448,7 +448,7 @@ TEST(LibraryErrors, AFailingCompilerIsACompileErrorWithItsMessage) {
   LibraryOptions options;
   options.compiler.compiler = cc.string();
   try {
-    generateFunctionLibrary(arm7(), exampleSpec("crba"), out, options);
+    generateFunctionLibrary(libraryArm7(), exampleSpec("crba"), out, options);
     FAIL() << "no error";
   } catch (const codegen::CompileError& e) {
     EXPECT_EQ(e.kind(), codegen::CompileError::Kind::CompilerFailed);
@@ -483,7 +483,7 @@ TEST(LibraryErrors, SpecsThatDoNotFitTheModelAreSpecErrors) {
     spec.frame = "no_such_frame";
     const fs::path out = dir.path() / "frame";
     try {
-      generateFunctionLibrary(arm7(), spec, out);
+      generateFunctionLibrary(libraryArm7(), spec, out);
       FAIL() << "no error";
     } catch (const SpecError& e) {
       const std::string what = e.what();
@@ -612,7 +612,7 @@ TEST(LibraryDescription, SparseHessianDescriptionAgreesWithTheDescriptor) {
 }
 
 TEST(LibraryDescription, DenseDescriptionAgreesWithTheDescriptor) {
-  checkDescription(arm7(), cached("arm7", "rnea_hessian"));
+  checkDescription(libraryArm7(), cached("arm7", "rnea_hessian"));
 }
 
 }  // namespace

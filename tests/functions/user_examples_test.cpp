@@ -51,7 +51,7 @@ Robot robotFor(const std::string& spec) {
 }
 
 // The variable inputs of `all` (every input in the spec's order).
-std::vector<Eigen::VectorXd> variableInputs(const FunctionSpec& spec, const std::vector<Eigen::VectorXd>& all) {
+std::vector<Eigen::VectorXd> exampleVariableInputs(const FunctionSpec& spec, const std::vector<Eigen::VectorXd>& all) {
   std::vector<Eigen::VectorXd> out;
   for (std::size_t i = 0; i < spec.inputs.size(); ++i)
     if (!spec.inputs[i].fixed) out.push_back(all[i]);

@@ -16,7 +16,7 @@
 namespace robodiff {
 namespace {
 
-Model arm7() {
+Model workLimitArm7() {
   return loadUrdfFile((testing::sourceDir() / "examples" / "robots" / "arm7.urdf").string(), RootJoint::Fixed);
 }
 
@@ -26,7 +26,7 @@ FunctionSpec specOf(const std::string& expression) {
 }
 
 std::string tooLargeMessage(const std::string& expression, bool reference) {
-  const Model model = arm7();
+  const Model model = workLimitArm7();
   const FunctionSpec spec = specOf(expression);
   const auto started = std::chrono::steady_clock::now();
   try {
@@ -52,7 +52,7 @@ TEST(UserFunctionWorkLimit, HugeProductsAndSumsAreRefusedAtOnce) {
 }
 
 TEST(UserFunctionWorkLimit, LargeButReasonableExpressionsStillBuild) {
-  const Model model = arm7();
+  const Model model = workLimitArm7();
   const FunctionSpec spec = specOf("sum(eye(1000) @ zeros(1000, 7) @ q) + sumsq(zeros(2000, 2000))");
   EXPECT_NO_THROW(userReferenceValue(model, spec, 0, {Eigen::VectorXd::Zero(model.nq)}));
 }

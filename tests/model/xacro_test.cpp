@@ -21,7 +21,7 @@ const std::string kXacro = R"(<?xml version="1.0"?>
 </robot>
 )";
 
-std::string errorOf(const std::string& path) {
+std::string xacroErrorOf(const std::string& path) {
   try {
     loadUrdfFile(path);
   } catch (const ModelError& e) {
@@ -33,7 +33,7 @@ std::string errorOf(const std::string& path) {
 TEST(Xacro, AXacroFileIsRefusedWithTheCommandThatExpandsIt) {
   testing::TempDir tmp;
   const auto path = tmp.file("arm.urdf.xacro", kXacro);
-  const std::string message = errorOf(path.string());
+  const std::string message = xacroErrorOf(path.string());
   EXPECT_EQ(message.rfind(path.string() + ": this is a xacro file", 0), 0u) << message;
   EXPECT_NE(message.find("xacro " + path.string() + " > robot.urdf"), std::string::npos) << message;
   EXPECT_NE(message.find("ros2 run xacro xacro"), std::string::npos) << message;

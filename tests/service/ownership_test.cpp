@@ -10,13 +10,13 @@
 namespace robodiff::server::testing {
 namespace {
 
-CallContext as(const std::string& name, bool operator_ = false) {
+CallContext asCaller(const std::string& name, bool operator_ = false) {
   CallContext ctx = context();
   ctx.caller = Caller{name, operator_, true};
   return ctx;
 }
 
-const CallContext alice = as("dds:alice"), bob = as("dds:bob"), ops = as("dds:ops", true);
+const CallContext alice = asCaller("dds:alice"), bob = asCaller("dds:bob"), ops = asCaller("dds:ops", true);
 
 std::vector<std::string> listed(Service& service, const CallContext& who) {
   rpc::ListFunctionsReply reply;
@@ -36,7 +36,7 @@ Status release(Service& service, const CallContext& who, const std::string& id, 
 }
 
 // LoadModel and GetFunction (waiting until READY) as `who`.
-rpc::GetFunctionReply functionAs(Service& service, const CallContext& who, std::string& model_id) {
+rpc::GetFunctionReply functionAsCaller(Service& service, const CallContext& who, std::string& model_id) {
   rpc::LoadModelReply model;
   EXPECT_TRUE(service.loadModel(who, {arm7Urdf(), false, ""}, model).ok());
   model_id = model.model_id;
@@ -60,7 +60,7 @@ TEST(Ownership, AnotherCallerNeitherSeesNorReleasesAFunction) {
   ServiceWorkspace ws;
   auto service = ws.start(ws.options());
   std::string model_id;
-  const auto f = functionAs(*service, alice, model_id);
+  const auto f = functionAsCaller(*service, alice, model_id);
 
   EXPECT_EQ(listed(*service, alice), std::vector<std::string>{f.function_id});
   EXPECT_TRUE(listed(*service, bob).empty());
@@ -78,8 +78,8 @@ TEST(Ownership, ASharedFunctionIsHeldPerCaller) {
   ServiceWorkspace ws;
   auto service = ws.start(ws.options());
   std::string model_id;
-  const auto f = functionAs(*service, alice, model_id);
-  const auto g = functionAs(*service, bob, model_id);  // the same spec: one function, two holders
+  const auto f = functionAsCaller(*service, alice, model_id);
+  const auto g = functionAsCaller(*service, bob, model_id);  // the same spec: one function, two holders
   ASSERT_EQ(f.function_id, g.function_id);
   EXPECT_EQ(listed(*service, bob), std::vector<std::string>{f.function_id});
 
@@ -101,8 +101,8 @@ TEST(Ownership, AnOperatorSeesAndReleasesEveryFunction) {
   ServiceWorkspace ws;
   auto service = ws.start(ws.options());
   std::string model_id;
-  const auto f = functionAs(*service, alice, model_id);
-  functionAs(*service, alice, model_id);  // a second hold
+  const auto f = functionAsCaller(*service, alice, model_id);
+  functionAsCaller(*service, alice, model_id);  // a second hold
   std::uint32_t left = 7;
   ASSERT_TRUE(release(*service, ops, f.function_id, &left).ok());  // holds none: every hold goes
   EXPECT_EQ(left, 0u);

@@ -66,7 +66,7 @@ Eigen::MatrixXd jacobianAt(const TangentTrace& t, const Eigen::VectorXd& q, cons
 }
 
 // Central differences of the double algorithm: q moved by integrate in the tangent space.
-Eigen::MatrixXd finiteDifferences(const Model& model, Function fn, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+Eigen::MatrixXd derivativeFiniteDifferences(const Model& model, Function fn, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                                   const Eigen::VectorXd& x, double h = 1e-6) {
   Data<double> data(model);
   auto f = [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, const Eigen::VectorXd& xx) -> Eigen::VectorXd {
@@ -118,7 +118,7 @@ class DynamicsDerivatives : public ::testing::TestWithParam<RobotCase> {
 TEST_P(DynamicsDerivatives, RneaJacobianMatchesFiniteDifferences) {
   const auto t = traceTangent(model, Function::Rnea);
   EXPECT_EQ(t->jac.mode, JacobianMode::Reverse);  // nv rows, 3 nv columns
-  EXPECT_TRUE(matricesAgree(jacobianAt(*t, q, v, a), finiteDifferences(model, Function::Rnea, q, v, a), 1e-6));
+  EXPECT_TRUE(matricesAgree(jacobianAt(*t, q, v, a), derivativeFiniteDifferences(model, Function::Rnea, q, v, a), 1e-6));
   // d tau / d a = M.
   Data<double> data(model);
   EXPECT_TRUE(matricesAgree(jacobianAt(*t, q, v, a).rightCols(model.nv), crba(model, data, q), 1e-12));
@@ -126,7 +126,7 @@ TEST_P(DynamicsDerivatives, RneaJacobianMatchesFiniteDifferences) {
 
 TEST_P(DynamicsDerivatives, AbaJacobianMatchesFiniteDifferences) {
   const auto t = traceTangent(model, Function::Aba);
-  EXPECT_TRUE(matricesAgree(jacobianAt(*t, q, v, tau), finiteDifferences(model, Function::Aba, q, v, tau), 1e-6));
+  EXPECT_TRUE(matricesAgree(jacobianAt(*t, q, v, tau), derivativeFiniteDifferences(model, Function::Aba, q, v, tau), 1e-6));
 }
 
 TEST_P(DynamicsDerivatives, ForwardAndReverseModeAgree) {
@@ -154,7 +154,7 @@ TEST_P(DynamicsDerivatives, SparsityPatternIsTheStructuralNonzeros) {
     for (int i = p.row_ptr[r]; i < p.row_ptr[r + 1]; ++i, ++k) EXPECT_EQ(nz[k], dense(r, p.col_idx[i]));
   // Every entry outside the pattern is a structural zero: exactly zero in the finite
   // differences too; the pattern lies within the dependency pattern.
-  const Eigen::MatrixXd fd = finiteDifferences(model, Function::Rnea, q, v, a);
+  const Eigen::MatrixXd fd = derivativeFiniteDifferences(model, Function::Rnea, q, v, a);
   const SparsityPattern dep = dependencyPattern(t->graph, t->value, [&] {
     std::vector<std::uint32_t> wrt;
     for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(3 * model.nv); ++i) wrt.push_back(model.nq + i);

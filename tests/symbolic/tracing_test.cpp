@@ -18,7 +18,7 @@ using testing::matricesAgree;
 
 using testing::RobotCase;
 
-std::vector<RobotCase> robotCases() {
+std::vector<RobotCase> tracingRobotCases() {
   GeneratorOptions quadruped;
   quadruped.kind = RobotKind::Tree;
   quadruped.tree = "quadruped";
@@ -59,7 +59,7 @@ class Tracing : public ::testing::TestWithParam<RobotCase> {
   Eigen::VectorXd q, v, a, tau;
 };
 
-Eigen::VectorXd stack(std::initializer_list<const Eigen::VectorXd*> parts) {
+Eigen::VectorXd tracedStack(std::initializer_list<const Eigen::VectorXd*> parts) {
   Eigen::Index n = 0;
   for (auto* p : parts) n += p->size();
   Eigen::VectorXd out(n);
@@ -77,7 +77,7 @@ TEST_P(Tracing, Rnea) {
   VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), as = tracer.addInputs("a", model.nv);
   Data<Sym> ds(model);
   Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, rnea(model, ds, qs, vs, as), stack({&q, &v, &a})),
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, rnea(model, ds, qs, vs, as), tracedStack({&q, &v, &a})),
                             rnea(model, dd, q, v, a), 1e-12));
 }
 
@@ -87,7 +87,7 @@ TEST_P(Tracing, Aba) {
   VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), ts = tracer.addInputs("tau", model.nv);
   Data<Sym> ds(model);
   Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, aba(model, ds, qs, vs, ts), stack({&q, &v, &tau})),
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, aba(model, ds, qs, vs, ts), tracedStack({&q, &v, &tau})),
                             aba(model, dd, q, v, tau), 1e-12));
 }
 
@@ -108,7 +108,7 @@ TEST_P(Tracing, Regressor) {
   VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), as = tracer.addInputs("a", model.nv);
   Data<Sym> ds(model);
   Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, jointTorqueRegressor(model, ds, qs, vs, as), stack({&q, &v, &a})),
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, jointTorqueRegressor(model, ds, qs, vs, as), tracedStack({&q, &v, &a})),
                             jointTorqueRegressor(model, dd, q, v, a), 1e-12));
 }
 
@@ -135,7 +135,7 @@ TEST_P(Tracing, KinematicsAndFrameJacobians) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Robots, Tracing, ::testing::ValuesIn(robotCases()),
+INSTANTIATE_TEST_SUITE_P(Robots, Tracing, ::testing::ValuesIn(tracingRobotCases()),
                          [](const auto& info) { return info.param.label; });
 
 }  // namespace

@@ -25,7 +25,7 @@ using namespace std::chrono_literals;
 using nlohmann::json;
 using testing::TempDir;
 
-WorkerPoolOptions poolOptions(unsigned workers, std::size_t queue_capacity = 16) {
+WorkerPoolOptions workerPoolOptions(unsigned workers, std::size_t queue_capacity = 16) {
   WorkerPoolOptions o;
   o.worker_executable = testing::workerPath();
   o.workers = workers;
@@ -40,7 +40,7 @@ std::optional<JobResult> resultOf(const JobHandle& handle, std::chrono::seconds 
   return handle.result.get();
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool textContains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // A build whose compiler sleeps for 30 s, claimed in a cache of its own.
 struct SleepingBuild {
@@ -77,10 +77,10 @@ TEST(WorkerProgram, SaysWhatItIsAndLeavesAtEndOfInput) {
   const std::string worker = testing::shellQuote(testing::workerPath().string());
   const testing::ProcessResult help = testing::runCommand(worker + " --help");
   EXPECT_EQ(help.exit_code, 0);
-  EXPECT_TRUE(contains(help.out, "started by the pool")) << help.out;
+  EXPECT_TRUE(textContains(help.out, "started by the pool")) << help.out;
   const testing::ProcessResult wrong = testing::runCommand(worker + " --frobnicate");
   EXPECT_EQ(wrong.exit_code, 2);
-  EXPECT_TRUE(contains(wrong.err, "unknown argument '--frobnicate'")) << wrong.err;
+  EXPECT_TRUE(textContains(wrong.err, "unknown argument '--frobnicate'")) << wrong.err;
   const testing::ProcessResult idle = testing::runCommand(worker);  // stdin: /dev/null
   EXPECT_EQ(idle.exit_code, 0) << idle.err;
   EXPECT_EQ(idle.out, "");
@@ -88,36 +88,36 @@ TEST(WorkerProgram, SaysWhatItIsAndLeavesAtEndOfInput) {
 
 TEST(WorkerPool, AWorkerProgramThatCannotRunIsAClearError) {
   TempDir dir;
-  WorkerPoolOptions options = poolOptions(1);
+  WorkerPoolOptions options = workerPoolOptions(1);
   options.worker_executable = "/nonexistent/robodiff-worker";
   try {
     WorkerPool pool(options);
     FAIL() << "a pool started without its worker program";
   } catch (const std::runtime_error& e) {
-    EXPECT_TRUE(contains(e.what(), "/nonexistent/robodiff-worker is not an executable file")) << e.what();
+    EXPECT_TRUE(textContains(e.what(), "/nonexistent/robodiff-worker is not an executable file")) << e.what();
   }
   options.worker_executable = dir.file("not-executable", "#!/bin/sh\n");
   EXPECT_THROW(WorkerPool{options}, std::runtime_error);
-  options = poolOptions(0);
+  options = workerPoolOptions(0);
   EXPECT_THROW(WorkerPool{options}, std::invalid_argument);
 }
 
 TEST(WorkerPool, AWorkerThatExitsAtOnceCrashesJobsButIsNotRestartedInATightLoop) {
   TempDir dir;
-  WorkerPoolOptions options = poolOptions(1);
+  WorkerPoolOptions options = workerPoolOptions(1);
   options.worker_executable = dir.script("broken-worker", "exit 3\n");
   WorkerPool pool(options);
   const auto r = resultOf(pool.submit(pingRequest()));
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::Crashed);
-  EXPECT_TRUE(contains(r->message, "exited with status 3 during the job")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "exited with status 3 during the job")) << r->message;
   // Observing a rate over a window: restarts are at least 1 s apart.
   std::this_thread::sleep_for(1500ms);
   EXPECT_LE(pool.stats().workers_started, 4u);
 }
 
 TEST(WorkerPool, PingsSpreadOverTwoWorkers) {
-  WorkerPool pool(poolOptions(2));
+  WorkerPool pool(workerPoolOptions(2));
   std::set<pid_t> started;
   for (const WorkerInfo& w : pool.workers()) started.insert(w.pid);
   ASSERT_EQ(started.size(), 2u);
@@ -142,11 +142,11 @@ TEST(WorkerPool, PingsSpreadOverTwoWorkers) {
 }
 
 TEST(WorkerPool, UnknownRequestsFailAndBadOnesAreRefused) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   const auto r = resultOf(pool.submit(R"({"type": "frobnicate"})"));
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::Failed);
-  EXPECT_TRUE(contains(r->message, "unknown request type \"frobnicate\"")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "unknown request type \"frobnicate\"")) << r->message;
   EXPECT_THROW(pool.submit("not json"), std::invalid_argument);
   EXPECT_THROW(pool.submit(R"({"no": "type"})"), std::invalid_argument);
   expectPing(pool);  // the worker is still there
@@ -154,7 +154,7 @@ TEST(WorkerPool, UnknownRequestsFailAndBadOnesAreRefused) {
 }
 
 TEST(WorkerPool, ABuildThroughAWorkerIsPublished) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   TempDir dir;
   cache::Cache cache = cache::Cache::open(dir / "cache");
   const testing::ClaimedBuild b = testing::claimBuild(cache, testing::arm7Urdf(), testing::kRneaValueSpec);
@@ -172,7 +172,7 @@ TEST(WorkerPool, ABuildThroughAWorkerIsPublished) {
 }
 
 TEST(WorkerPool, AFailedBuildIsReportedAndTheWorkerGoesOn) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   BuildRequest request;
   request.urdf = "<robot name='broken'><link name='a'/><joint name='j' type='revolute'><parent link='a'/></joint>";
   request.urdf_source = "broken.urdf";
@@ -185,13 +185,13 @@ TEST(WorkerPool, AFailedBuildIsReportedAndTheWorkerGoesOn) {
   const BuildOutcome outcome = buildOutcomeFromJson(r->reply);
   EXPECT_EQ(outcome.error_kind, "invalid_urdf") << outcome.message;
   EXPECT_EQ(r->message, outcome.message);
-  EXPECT_TRUE(contains(r->message, "broken.urdf")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "broken.urdf")) << r->message;
   EXPECT_EQ(expectPing(pool), r->worker_pid) << "the worker did not survive a failed build";
 
   const auto bad = resultOf(pool.submit(R"({"type": "build", "request": {"urdf": 1}})"));
   ASSERT_TRUE(bad.has_value());
   EXPECT_EQ(bad->state, JobState::Failed);
-  EXPECT_TRUE(contains(bad->message, "field \"urdf\" must be a string")) << bad->message;
+  EXPECT_TRUE(textContains(bad->message, "field \"urdf\" must be a string")) << bad->message;
 }
 
 // What a ping says about the address-space limit it ran under.
@@ -205,7 +205,7 @@ std::uint64_t pingLimit(WorkerPool& pool, std::optional<std::uint64_t> job_limit
 }
 
 TEST(WorkerPool, EachJobRunsUnderItsMemoryLimitWhichIsLiftedAfterIt) {
-  WorkerPoolOptions options = poolOptions(1);
+  WorkerPoolOptions options = workerPoolOptions(1);
   options.memory_limit_bytes = std::uint64_t{3} << 30;
   WorkerPool pool(options);
   pid_t first = 0, second = 0, third = 0;
@@ -222,7 +222,7 @@ TEST(WorkerPool, EachJobRunsUnderItsMemoryLimitWhichIsLiftedAfterIt) {
 }
 
 TEST(WorkerPool, ABuildOverItsMemoryLimitFailsAndTheWorkerGoesOn) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   TempDir dir;
   cache::Cache cache = cache::Cache::open(dir / "cache");
   // The humanoid's RNEA Hessian traces a graph of well over 32 MiB; an idle worker maps ~32 MiB (it links
@@ -236,7 +236,7 @@ TEST(WorkerPool, ABuildOverItsMemoryLimitFailsAndTheWorkerGoesOn) {
   const auto r = resultOf(pool.submit(starved.dump()), 60s);
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::Failed) << r->message;
-  EXPECT_TRUE(contains(r->message, "out of memory")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "out of memory")) << r->message;
   EXPECT_FALSE(cache.find(big.prepared.key).has_value());
   cache.abandon(big.request.claim);
   testing::expectNothingLeft(cache, big.prepared.key);
@@ -250,7 +250,7 @@ TEST(WorkerPool, ABuildOverItsMemoryLimitFailsAndTheWorkerGoesOn) {
 }
 
 TEST(WorkerPool, TheQueueIsBounded) {
-  WorkerPool pool(poolOptions(1, 2));
+  WorkerPool pool(workerPoolOptions(1, 2));
   SleepingBuild busy;
   std::promise<void> started;
   JobCallbacks callbacks;
@@ -264,7 +264,7 @@ TEST(WorkerPool, TheQueueIsBounded) {
     pool.submit(pingRequest());
     FAIL() << "a third job was queued behind a busy worker with queue_capacity 2";
   } catch (const QueueFull& e) {
-    EXPECT_TRUE(contains(e.what(), "queue_capacity 2")) << e.what();
+    EXPECT_TRUE(textContains(e.what(), "queue_capacity 2")) << e.what();
   }
   EXPECT_EQ(pool.stats().queued, 2u);
   EXPECT_EQ(pool.stats().running, 1u);
@@ -279,14 +279,14 @@ TEST(WorkerPool, TheQueueIsBounded) {
 }
 
 TEST(WorkerPool, ATimeoutKillsTheWorkerAndTheCompilerItStarted) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   const pid_t first_worker = pool.workers().at(0).pid;
   SleepingBuild build;
   const auto r = resultOf(pool.submit(build.message(), {}, 3s));
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::TimedOut) << r->message;
-  EXPECT_TRUE(contains(r->message, "the limit is 3 s")) << r->message;
-  EXPECT_TRUE(contains(r->message, "worker " + std::to_string(first_worker))) << r->message;
+  EXPECT_TRUE(textContains(r->message, "the limit is 3 s")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "worker " + std::to_string(first_worker))) << r->message;
   EXPECT_LT(r->run_seconds, 10.0);
   build.expectCompilerGone();
   EXPECT_TRUE(testing::waitFor([&] { return testing::processIsDead(first_worker); }, 5s));
@@ -301,14 +301,14 @@ TEST(WorkerPool, ATimeoutKillsTheWorkerAndTheCompilerItStarted) {
 
 TEST(WorkerPool, AWorkerThatNeverAnswersTimesOut) {
   TempDir dir;
-  WorkerPoolOptions options = poolOptions(1);
+  WorkerPoolOptions options = workerPoolOptions(1);
   options.worker_executable = dir.script("silent-worker", "exec sleep 60\n");
   WorkerPool pool(options);
   const pid_t silent = pool.workers().at(0).pid;
   const auto r = resultOf(pool.submit(pingRequest(), {}, 300ms));
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::TimedOut);
-  EXPECT_TRUE(contains(r->message, "the limit is 0.3 s")) << r->message;
+  EXPECT_TRUE(textContains(r->message, "the limit is 0.3 s")) << r->message;
   EXPECT_TRUE(testing::waitFor([&] { return testing::processIsDead(silent); }, 5s));
   EXPECT_TRUE(testing::waitFor([&] {
     const auto w = pool.workers();
@@ -317,7 +317,7 @@ TEST(WorkerPool, AWorkerThatNeverAnswersTimesOut) {
 }
 
 TEST(WorkerPool, AWorkerKilledAsItTakesAJobCrashesOnlyThatJob) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   JobCallbacks callbacks;
   std::atomic<pid_t> killed{0};
   callbacks.on_start = [&](pid_t worker) {
@@ -337,7 +337,7 @@ TEST(WorkerPool, AWorkerKilledAsItTakesAJobCrashesOnlyThatJob) {
 }
 
 TEST(WorkerPool, AWorkerKilledMidCompileLeavesNothingBehind) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   SleepingBuild build;
   std::atomic<pid_t> worker{0};
   std::atomic<bool> compiling{false};
@@ -354,7 +354,7 @@ TEST(WorkerPool, AWorkerKilledMidCompileLeavesNothingBehind) {
   const auto r = resultOf(handle);
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::Crashed);
-  EXPECT_TRUE(contains(r->message, "worker " + std::to_string(worker.load()) + " was killed by signal 9 (SIGKILL)"))
+  EXPECT_TRUE(textContains(r->message, "worker " + std::to_string(worker.load()) + " was killed by signal 9 (SIGKILL)"))
       << r->message;
   build.expectCompilerGone();
   build.cache.abandon(build.build.request.claim);
@@ -363,7 +363,7 @@ TEST(WorkerPool, AWorkerKilledMidCompileLeavesNothingBehind) {
 }
 
 TEST(WorkerPool, CancelsQueuedAndRunningJobs) {
-  WorkerPool pool(poolOptions(1));
+  WorkerPool pool(workerPoolOptions(1));
   SleepingBuild build;
   const JobHandle running = pool.submit(build.message());
   const JobHandle queued = pool.submit(pingRequest());
@@ -379,7 +379,7 @@ TEST(WorkerPool, CancelsQueuedAndRunningJobs) {
   const auto r = resultOf(running);
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->state, JobState::Cancelled);
-  EXPECT_TRUE(contains(r->message, "cancelled while running on worker " + std::to_string(worker))) << r->message;
+  EXPECT_TRUE(textContains(r->message, "cancelled while running on worker " + std::to_string(worker))) << r->message;
   build.expectCompilerGone();
 
   EXPECT_FALSE(pool.cancel(running.id)) << "a finished job cannot be cancelled";
@@ -395,7 +395,7 @@ TEST(WorkerPool, StoppingThePoolCancelsJobsAndLeavesNoProcess) {
   SleepingBuild build;
   JobHandle running, queued;
   {
-    WorkerPool pool(poolOptions(1));
+    WorkerPool pool(workerPoolOptions(1));
     running = pool.submit(build.message());
     queued = pool.submit(pingRequest());
     ASSERT_TRUE(testing::waitFor([&] { return build.compilerStarted(); })) << "the compiler did not start";
@@ -403,14 +403,14 @@ TEST(WorkerPool, StoppingThePoolCancelsJobsAndLeavesNoProcess) {
   for (const JobHandle* h : {&running, &queued})
     ASSERT_EQ(h->result.wait_for(0s), std::future_status::ready) << "the pool stopped without setting a result";
   EXPECT_EQ(running.result.get().state, JobState::Cancelled);
-  EXPECT_TRUE(contains(running.result.get().message, "the pool stopped while the job ran"))
+  EXPECT_TRUE(textContains(running.result.get().message, "the pool stopped while the job ran"))
       << running.result.get().message;
   EXPECT_EQ(queued.result.get().state, JobState::Cancelled);
   EXPECT_EQ(queued.result.get().message, "the pool stopped before the job ran");
   build.expectCompilerGone();
   build.cache.abandon(build.build.request.claim);
 
-  { WorkerPool idle(poolOptions(2)); }  // idle workers leave on end of input
+  { WorkerPool idle(workerPoolOptions(2)); }  // idle workers leave on end of input
 
   int status;
   errno = 0;

@@ -175,7 +175,7 @@ nlohmann::json rowsJson(const std::vector<Comparison>& rows) {
   return out;
 }
 
-void check(const CheckArgs& args) {
+void runCheck(const CheckArgs& args) {
   const Model model = loadRobot(args.robot);
   const FunctionSpec spec = loadFunctionSpec(args.spec);
   const Backend backend = parseBackend(args.backend);
@@ -238,7 +238,7 @@ void addCheckCommand(CLI::App& app) {
       "max(|expected|, 1e-3 max|expected|, 1e-6).\n"
       "Exit status: 0 when every comparison passes, 2 when one or more fail, 1 on errors (bad spec, unknown "
       "frame, compile failure, ...).");
-  cmd->callback([args] { check(*args); });
+  cmd->callback([args] { runCheck(*args); });
 }
 
 }  // namespace robodiff::cli

@@ -33,7 +33,7 @@ nlohmann::json placementJson(const SE3<double>& m) {
   return {{"translation", toJson(Eigen::VectorXd(m.translation))}, {"rotation", toJson(Eigen::MatrixXd(m.rotation))}};
 }
 
-struct Options {
+struct ComputeOptions {
   RobotArgs robot;
   std::string function, spec, frame, reference = "LOCAL_WORLD_ALIGNED", format = "json";
   std::string backend;  // empty: reference, or interpreted for a user spec
@@ -46,12 +46,12 @@ struct Options {
 const std::vector<std::string> kFunctions = {"rnea", "aba",      "crba", "gravity",  "nle",
                                              "fk",   "jacobian", "com",  "regressor"};
 
-std::pair<State, std::string> loadState(const Options& o, const Model& model, int weight_count = 0) {
+std::pair<State, std::string> loadState(const ComputeOptions& o, const Model& model, int weight_count = 0) {
   return cli::loadState(o.state, model, weight_count);
 }
 
 // The frame --frame names, checked against the model.
-std::optional<int> namedFrame(const Options& o, const Model& model) {
+std::optional<int> namedFrame(const ComputeOptions& o, const Model& model) {
   if (o.frame.empty()) return std::nullopt;
   std::optional<int> frame = model.findFrame(o.frame);
   if (!frame) throw std::invalid_argument("--frame: no frame named '" + o.frame + "' in " + o.robot.urdf);
@@ -60,7 +60,7 @@ std::optional<int> namedFrame(const Options& o, const Model& model) {
 
 // The value of --function straight from core/dynamics (no --spec, --derivatives or
 // other backend): the original output of `compute`.
-void runDirect(const Options& o) {
+void runDirect(const ComputeOptions& o) {
   Model model = loadRobot(o.robot);
   auto [state, source] = loadState(o, model);
   const std::string& fn = o.function;
@@ -127,7 +127,7 @@ void runDirect(const Options& o) {
 
 // --function as a spec: its value and, with --derivatives, the Jacobian w.r.t. all its
 // inputs. compute's "jacobian" is the spec's "frame_jacobian".
-FunctionSpec specForFunction(const Options& o, const Model& model) {
+FunctionSpec specForFunction(const ComputeOptions& o, const Model& model) {
   const std::string name = o.function == "jacobian" ? "frame_jacobian" : o.function;
   const FunctionInfo* info = nullptr;
   for (const FunctionInfo& f : modelFunctions())
@@ -146,7 +146,7 @@ FunctionSpec specForFunction(const Options& o, const Model& model) {
 
 // The spec of --spec or --function, with the outputs compute prints: only the value
 // without --derivatives, every output (and the value first if missing) with it.
-FunctionSpec computedSpec(const Options& o, const Model& model, const std::optional<FunctionSpec>& loaded) {
+FunctionSpec computedSpec(const ComputeOptions& o, const Model& model, const std::optional<FunctionSpec>& loaded) {
   FunctionSpec spec = loaded ? *loaded : specForFunction(o, model);
   const auto is_value = [](const OutputSpec& out) { return out.kind == OutputKind::Value; };
   if (!o.derivatives)
@@ -158,7 +158,7 @@ FunctionSpec computedSpec(const Options& o, const Model& model, const std::optio
 
 // The runtime inputs of `spec` from the state, in the function's block order: the
 // variable inputs, then the Hessian weights if a Hessian takes them at runtime.
-std::vector<Eigen::VectorXd> runtimeInputs(const Options& o, const Model& model, const FunctionSpec& spec,
+std::vector<Eigen::VectorXd> runtimeInputs(const ComputeOptions& o, const Model& model, const FunctionSpec& spec,
                                            const std::string& label, State& state_used) {
   int weights = 0;
   for (const OutputSpec& out : spec.outputs)
@@ -184,14 +184,14 @@ std::vector<OutputBlockInfo> blockInfos(const SpecFunction& f) {
 
 // --backend, or the default: interpreted for a user spec (exact derivatives, nothing
 // compiled), else reference.
-std::string backendName(const Options& o, bool user) {
+std::string backendName(const ComputeOptions& o, bool user) {
   if (!o.backend.empty()) return o.backend;
   return user ? "interpreted" : "reference";
 }
 
 // The function for `backend`: traced, and with --no-cache compiled into a temporary
 // directory; a cached generated library is opened by evaluateBy.
-SpecFunction functionFor(const Options& o, const Model& model, FunctionSpec spec, Backend backend) {
+SpecFunction functionFor(const ComputeOptions& o, const Model& model, FunctionSpec spec, Backend backend) {
   LibraryOptions options;
   options.compiler.compiler = o.compiler;
   const bool cached = backend == Backend::Generated && !o.no_cache;
@@ -207,7 +207,7 @@ struct Evaluation {
 
 // f's outputs by `backend`; the generated library from the cache unless --no-cache.
 // `spec_text`: as CachedLibraryRequest::spec_text.
-Evaluation evaluateBy(const Options& o, const Model& model, const SpecFunction& f, Backend backend,
+Evaluation evaluateBy(const ComputeOptions& o, const Model& model, const SpecFunction& f, Backend backend,
                       const std::vector<Eigen::VectorXd>& runtime, const std::string& spec_text = "") {
   if (backend != Backend::Generated) return {f.evaluate(backend, runtime), ""};
   if (o.no_cache) return {f.evaluate(backend, runtime), "off"};
@@ -236,7 +236,7 @@ std::string backendLabel(Backend backend, const std::string& cache) {
 }
 
 // A spec's outputs (--spec, --derivatives or --backend) by the chosen backend.
-void runSpec(const Options& o, const std::optional<FunctionSpec>& loaded) {
+void runSpec(const ComputeOptions& o, const std::optional<FunctionSpec>& loaded) {
   const Model model = loadRobot(o.robot);
   const FunctionSpec spec = computedSpec(o, model, loaded);
   const std::string label = o.function.empty() ? toString(spec.function) : o.function;
@@ -269,7 +269,7 @@ std::vector<NamedInput> userInputs(const SpecFunction& f) {
 }
 
 // A user spec: every output by the backend, the inputs read by name.
-void runUser(const Options& o, const FunctionSpec& spec) {
+void runUser(const ComputeOptions& o, const FunctionSpec& spec) {
   if (!o.frame.empty()) throw std::invalid_argument("--frame does not apply to a user spec: its expressions name frames");
   const Model model = loadRobot(o.robot);
   const Backend backend = parseBackend(backendName(o, true));
@@ -296,7 +296,7 @@ void runUser(const Options& o, const FunctionSpec& spec) {
   std::cout << userOutputsJson(std::move(meta), spec, out).dump() << "\n";
 }
 
-void run(const Options& o) {
+void run(const ComputeOptions& o) {
   if (o.function.empty() == o.spec.empty()) throw std::invalid_argument("give one of --function NAME and --spec FILE");
   std::optional<FunctionSpec> spec;
   if (!o.spec.empty()) spec = loadFunctionSpec(o.spec);
@@ -308,7 +308,7 @@ void run(const Options& o) {
 }  // namespace
 
 void addComputeCommand(CLI::App& app) {
-  auto options = std::make_shared<Options>();
+  auto options = std::make_shared<ComputeOptions>();
   CLI::App* cmd = app.add_subcommand("compute", "Evaluate a dynamics function, and its derivatives, at one state");
   addRobotOptions(*cmd, options->robot);
   auto* function = cmd->add_option("--function", options->function,

@@ -8,7 +8,7 @@ namespace {
 
 constexpr int kMaxColumns = 10;
 
-std::string number(double x) {
+std::string cellNumber(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", x);
   return buf;
@@ -20,7 +20,7 @@ Table Table::vector(const std::string& title, const std::vector<std::string>& la
   Table t;
   t.rows_.push_back({"", title});
   for (Eigen::Index i = 0; i < values.size(); ++i)
-    t.rows_.push_back({i < static_cast<Eigen::Index>(labels.size()) ? labels[i] : std::to_string(i), number(values[i])});
+    t.rows_.push_back({i < static_cast<Eigen::Index>(labels.size()) ? labels[i] : std::to_string(i), cellNumber(values[i])});
   return t;
 }
 
@@ -34,7 +34,7 @@ Table Table::matrix(const std::string& title, const std::vector<std::string>& ro
   t.rows_.push_back(header);
   for (Eigen::Index r = 0; r < m.rows(); ++r) {
     std::vector<std::string> row{r < static_cast<Eigen::Index>(row_labels.size()) ? row_labels[r] : std::to_string(r)};
-    for (Eigen::Index c = 0; c < shown; ++c) row.push_back(number(m(r, c)));
+    for (Eigen::Index c = 0; c < shown; ++c) row.push_back(cellNumber(m(r, c)));
     t.rows_.push_back(row);
   }
   if (shown < m.cols())
@@ -60,9 +60,9 @@ Table Table::placements() {
 }
 
 void Table::addPlacement(const std::string& name, const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
-  std::vector<std::string> row{name, number(p.x()), number(p.y()), number(p.z())};
+  std::vector<std::string> row{name, cellNumber(p.x()), cellNumber(p.y()), cellNumber(p.z())};
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) row.push_back(number(R(r, c)));
+    for (int c = 0; c < 3; ++c) row.push_back(cellNumber(R(r, c)));
   rows_.push_back(row);
 }
 

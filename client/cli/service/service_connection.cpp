@@ -16,8 +16,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
-std::string describe(const Status& status) { return toString(status.code) + ": " + status.message; }
-
 std::string secondsText(milliseconds d) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g s", static_cast<double>(d.count()) / 1000.0);
@@ -66,6 +64,8 @@ std::unique_ptr<client::DdsConnection> makeDds(const client::ServerAddress& a, s
 }
 
 }  // namespace
+
+std::string describe(const Status& status) { return toString(status.code) + ": " + status.message; }
 
 ServiceError::ServiceError(Status status) : std::runtime_error(describe(status)), status_(std::move(status)) {}
 

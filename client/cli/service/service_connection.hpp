@@ -40,6 +40,8 @@ class UsageError : public std::invalid_argument {
 
 // Throws ServiceError naming `what` (the method) unless `status` is OK.
 void check(const Status& status, const std::string& what);
+// "NOT_FOUND: no function ...": a status as one line of text.
+std::string describe(const Status& status);
 
 struct ServiceArgs {
   std::string server;            // empty: $ROBODIFF_SERVER, else auto

@@ -48,8 +48,6 @@ std::string functionName(const workers::BuildTarget& t) {
   }
 }
 
-std::string describe(const Status& s) { return toString(s.code) + ": " + s.message; }
-
 std::string secondsText(double s) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g s", s);

@@ -33,7 +33,7 @@ Shape shapeOf(Code c) {
 }
 
 // One instruction in value (SSA) form.
-struct Node {
+struct SsaNode {
   Code code;
   std::uint32_t reads[3], writes[2];
   std::uint32_t block = 0, index = 0;
@@ -44,7 +44,7 @@ struct Node {
 // AddSub (a+b)-c, SubAdd c-(a+b)). The same operations in the same order, rounded after
 // each, so results stay bit for bit; one dispatch and one stored value less each.
 // Removes the fused producers from `nodes`.
-void fuseSingleUse(std::vector<Node>& nodes, std::uint32_t nconst, std::uint32_t values) {
+void fuseSingleUse(std::vector<SsaNode>& nodes, std::uint32_t nconst, std::uint32_t values) {
   std::vector<std::uint32_t> uses(values, 0), producer(values, ~0u);
   for (std::uint32_t k = 0; k < nodes.size(); ++k) {
     const Shape sh = shapeOf(nodes[k].code);
@@ -52,7 +52,7 @@ void fuseSingleUse(std::vector<Node>& nodes, std::uint32_t nconst, std::uint32_t
     for (int w = 0; w < sh.writes; ++w) producer[nodes[k].writes[w]] = k;
   }
   std::vector<char> dead(nodes.size(), 0);
-  for (Node& n : nodes) {
+  for (SsaNode& n : nodes) {
     if (n.code != Code::Add && n.code != Code::Sub && n.code != Code::Mul) continue;
     // The operand to absorb: produced by a Mul or an Add read only here.
     for (int side = 0; side < 2; ++side) {
@@ -60,7 +60,7 @@ void fuseSingleUse(std::vector<Node>& nodes, std::uint32_t nconst, std::uint32_t
       if (x < nconst || x == other || uses[x] != 1) continue;
       const std::uint32_t pk = producer[x];
       if (pk == ~0u || dead[pk]) continue;
-      const Node& p = nodes[pk];
+      const SsaNode& p = nodes[pk];
       Code fused = Code::End;
       if (p.code == Code::Mul) {
         if (n.code == Code::Mul) fused = Code::MulMul;                        // (a*b)*c, c*(a*b)
@@ -87,15 +87,15 @@ void fuseSingleUse(std::vector<Node>& nodes, std::uint32_t nconst, std::uint32_t
 
 // Values (SSA): constants are values 0 .. nconst-1, every write a new value. `values`
 // returns the number of values.
-std::vector<Node> toValues(const std::vector<Interpreter::Instruction>& code, std::uint32_t nconst,
+std::vector<SsaNode> toValues(const std::vector<Interpreter::Instruction>& code, std::uint32_t nconst,
                            std::uint32_t nslots, std::uint32_t& values) {
-  std::vector<Node> nodes(code.size());
+  std::vector<SsaNode> nodes(code.size());
   std::vector<std::uint32_t> current(nslots);
   for (std::uint32_t k = 0; k < nslots; ++k) current[k] = k;  // only constants are read unwritten
   values = nconst;
   for (std::size_t k = 0; k < code.size(); ++k) {
     const Interpreter::Instruction& ins = code[k];
-    Node& n = nodes[k];
+    SsaNode& n = nodes[k];
     n.code = ins.code;
     const Shape sh = shapeOf(ins.code);
     switch (ins.code) {
@@ -118,7 +118,7 @@ std::vector<Node> toValues(const std::vector<Interpreter::Instruction>& code, st
 }
 
 // The instructions that read each value (indexed value - nconst).
-std::vector<std::vector<std::uint32_t>> consumersOf(const std::vector<Node>& nodes, std::uint32_t nconst,
+std::vector<std::vector<std::uint32_t>> consumersOf(const std::vector<SsaNode>& nodes, std::uint32_t nconst,
                                                     std::uint32_t values) {
   std::vector<std::vector<std::uint32_t>> consumers(values - nconst);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -133,7 +133,7 @@ std::vector<std::vector<std::uint32_t>> consumersOf(const std::vector<Node>& nod
 // is in topological order, so one backward pass). Switching to the opcode of the most
 // urgent ready instruction keeps long chains of alternating opcodes moving (UR5's RNEA
 // Jacobian: 223 groups when the opcode with the most ready instructions is taken, 107 so).
-std::vector<std::uint32_t> urgencies(const std::vector<Node>& nodes,
+std::vector<std::uint32_t> urgencies(const std::vector<SsaNode>& nodes,
                                      const std::vector<std::vector<std::uint32_t>>& consumers, std::uint32_t nconst) {
   std::vector<std::uint32_t> urgency(nodes.size(), 0);
   for (std::size_t k = nodes.size(); k-- > 0;) {
@@ -148,7 +148,7 @@ std::vector<std::uint32_t> urgencies(const std::vector<Node>& nodes,
 // Greedy list scheduling by opcode: keep emitting the current opcode while any
 // instruction of it is ready, else switch to the opcode of the most urgent ready one.
 // Zero first (before any store of its block). Returns the order (indices into nodes).
-std::vector<std::uint32_t> scheduleByOpcode(const std::vector<Node>& nodes, std::uint32_t nconst,
+std::vector<std::uint32_t> scheduleByOpcode(const std::vector<SsaNode>& nodes, std::uint32_t nconst,
                                             std::uint32_t values) {
   const std::size_t N = nodes.size();
   const std::vector<std::vector<std::uint32_t>> consumers = consumersOf(nodes, nconst, values);
@@ -194,12 +194,12 @@ std::vector<std::uint32_t> scheduleByOpcode(const std::vector<Node>& nodes, std:
 // again after its value's last read).
 class StreamWriter {
  public:
-  StreamWriter(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& order, std::uint32_t nconst,
+  StreamWriter(const std::vector<SsaNode>& nodes, const std::vector<std::uint32_t>& order, std::uint32_t nconst,
                std::uint32_t values)
       : nodes_(nodes), order_(order), nconst_(nconst), last_use_(values - nconst, 0), slot_(values - nconst, 0),
         used_(values - nconst, 0), next_slot_(nconst) {
     for (std::uint32_t p = 0; p < order.size(); ++p) {
-      const Node& n = nodes[order[p]];
+      const SsaNode& n = nodes[order[p]];
       const Shape sh = shapeOf(n.code);
       for (int r = 0; r < sh.reads; ++r)
         if (n.reads[r] >= nconst) last_use_[n.reads[r] - nconst] = p, used_[n.reads[r] - nconst] = 1;
@@ -217,7 +217,7 @@ class StreamWriter {
 
  private:
   void entry(std::uint32_t p) {
-    const Node& n = nodes_[order_[p]];
+    const SsaNode& n = nodes_[order_[p]];
     const Shape sh = shapeOf(n.code);
     std::uint32_t rs[3] = {0, 0, 0}, ws[2] = {0, 0};
     for (int r = 0; r < sh.reads; ++r) rs[r] = n.reads[r] < nconst_ ? n.reads[r] : slot_[n.reads[r] - nconst_];
@@ -255,7 +255,7 @@ class StreamWriter {
     }
   }
 
-  const std::vector<Node>& nodes_;
+  const std::vector<SsaNode>& nodes_;
   const std::vector<std::uint32_t>& order_;
   const std::uint32_t nconst_;
   std::vector<std::uint32_t> last_use_, slot_;
@@ -272,7 +272,7 @@ class StreamWriter {
 ScheduledStream scheduleInstructions(const std::vector<Interpreter::Instruction>& code, std::uint32_t nconst,
                                      std::uint32_t nslots) {
   std::uint32_t values = 0;
-  std::vector<Node> nodes = toValues(code, nconst, nslots, values);
+  std::vector<SsaNode> nodes = toValues(code, nconst, nslots, values);
   fuseSingleUse(nodes, nconst, values);
   const std::vector<std::uint32_t> order = scheduleByOpcode(nodes, nconst, values);
   return StreamWriter(nodes, order, nconst, values).write();

@@ -12,7 +12,7 @@
 namespace robodiff::server {
 namespace {
 
-HttpResponse json(std::string body) {
+HttpResponse jsonResponse(std::string body) {
   HttpResponse r;
   r.content_type = "application/json";
   r.body = std::move(body);
@@ -50,7 +50,7 @@ HttpResponse history(const DashboardHistory& h, const HttpRequest& request) {
       return badRequest("/api/history: after='" + text->substr(0, 40) +
                         "' is not a time in unix seconds (a finite number, e.g. after=1764135000.5)");
   }
-  return json(historyJson(h, after));
+  return jsonResponse(historyJson(h, after));
 }
 
 }  // namespace
@@ -65,7 +65,7 @@ void routeDashboard(HttpServer& server, const Service& service, DashboardHistory
   };
   server.route("/", page);
   server.route("/dashboard", page);
-  server.route("/api/overview", [&service](const HttpRequest&) { return json(overviewJson(service.overview())); });
+  server.route("/api/overview", [&service](const HttpRequest&) { return jsonResponse(overviewJson(service.overview())); });
   // The route owns the history: it samples for as long as the server holds its routes.
   auto h = std::make_shared<const DashboardHistory>(service, history_options);
   server.route("/api/history", [h](const HttpRequest& request) { return history(*h, request); });

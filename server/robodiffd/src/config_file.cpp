@@ -19,14 +19,9 @@ namespace robodiff::server {
 namespace {
 
 using config_values::closestName;
+using config_values::joined;
 using config_values::tomlString;
 using config_values::trim;
-
-std::string joined(const std::vector<std::string>& names) {
-  std::string text;
-  for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;
-  return text;
-}
 
 std::string position(const std::string& source, const toml::source_position& at) {
   return source + ":" + std::to_string(at.line) + ":" + std::to_string(at.column);

@@ -192,4 +192,10 @@ std::string closestName(const std::string& name, const std::vector<std::string>&
   return best;
 }
 
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
 }  // namespace robodiff::server::config_values

@@ -41,5 +41,7 @@ std::string tomlString(const std::string& text);
 // The candidate nearest to `name` (edit distance, or one containing the other); "" when
 // none is near enough to be a likely typo.
 std::string closestName(const std::string& name, const std::vector<std::string>& candidates);
+// "a, b, c": names listed for an error.
+std::string joined(const std::vector<std::string>& names);
 
 }  // namespace robodiff::server::config_values

@@ -161,12 +161,6 @@ std::vector<Setting> httpAndLogSettings() {
   };
 }
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string text;
-  for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;
-  return text;
-}
-
 // How --print-config writes a value: counts, flags and domain numbers bare, the rest as
 // TOML strings.
 std::string tomlValue(const Setting& setting, const std::string& text) {
