@@ -22,6 +22,9 @@ int main(int argc, char** argv) {
   urdf << in.rdbuf();
   ClientOptions options;
   options.server = parseServerAddress("local");
+  // Local mode still asks a robodiffd when one answers; this test wants none: a DDS domain
+  // no test's server uses (ctest keeps RouDi-starting tests apart from this one).
+  options.server.dds_domain = 232;
   options.cache_dir = argv[2];
   Client client(options);
   const ModelInfo model = client.loadModel(urdf.str());
