@@ -24,6 +24,7 @@ using testing::fieldNames;
 using testing::firstDifference;
 using testing::fillRandom;
 using testing::forEachMessage;
+using testing::forEachRandomMessage;
 
 template <class M, class Variant>
 struct IsAlternative;
@@ -49,18 +50,11 @@ M throughEnvelope(const M& in) {
 }
 
 TEST(DdsCodecEveryMessage, RandomMessagesRoundTripFieldForField) {
-  std::mt19937_64 rng(20261126);
-  int messages = 0;
-  forEachMessage([&](auto empty) {
-    using M = decltype(empty);
-    ++messages;
-    for (int sample = 0; sample < 50; ++sample) {
-      M in;
-      fillRandom(in, rng);
-      EXPECT_EQ(firstDifference(in, throughEnvelope(in)), "") << rpc::Fields<M>::kName << " sample " << sample;
-    }
+  const int kinds = forEachRandomMessage(20261126, 50, [](const auto& in, int sample) {
+    EXPECT_EQ(firstDifference(in, throughEnvelope(in)), "")
+        << rpc::Fields<std::remove_cvref_t<decltype(in)>>::kName << " sample " << sample;
   });
-  EXPECT_EQ(messages, 22);
+  EXPECT_EQ(kinds, 22);
 }
 
 TEST(DdsCodecEveryMessage, HeadersRoundTripFieldForField) {

@@ -16,6 +16,7 @@ namespace {
 using testing::firstDifference;
 using testing::fillRandom;
 using testing::forEachMessage;
+using testing::forEachRandomMessage;
 
 template <class M>
 constexpr bool kEvaluateLayout =
@@ -23,22 +24,15 @@ constexpr bool kEvaluateLayout =
     std::is_same_v<M, rpc::EvaluateReply> || std::is_same_v<M, rpc::EvaluateBatchReply>;
 
 TEST(ShmCodecEveryMessage, RandomMessagesRoundTripFieldForField) {
-  std::mt19937_64 rng(20261126);
-  int messages = 0;
-  forEachMessage([&](auto empty) {
-    using M = decltype(empty);
-    ++messages;
-    for (int sample = 0; sample < 50; ++sample) {
-      M in;
-      fillRandom(in, rng);
-      const auto bytes = encode(in);
-      M out;
-      const Status status = decode(bytes, out);
-      ASSERT_TRUE(status.ok()) << rpc::Fields<M>::kName << ": " << status.message;
-      EXPECT_EQ(firstDifference(in, out), "") << rpc::Fields<M>::kName << " sample " << sample;
-    }
+  const int kinds = forEachRandomMessage(20261126, 50, [](const auto& in, int sample) {
+    using M = std::remove_cvref_t<decltype(in)>;
+    const auto bytes = encode(in);
+    M out;
+    const Status status = decode(bytes, out);
+    ASSERT_TRUE(status.ok()) << rpc::Fields<M>::kName << ": " << status.message;
+    EXPECT_EQ(firstDifference(in, out), "") << rpc::Fields<M>::kName << " sample " << sample;
   });
-  EXPECT_EQ(messages, 22);
+  EXPECT_EQ(kinds, 22);
 }
 
 TEST(ShmCodecEveryMessage, EveryCutAndAnyTrailingByteIsInvalid) {

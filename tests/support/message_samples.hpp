@@ -83,4 +83,21 @@ std::vector<std::string> fieldNames() {
   return names;
 }
 
+// Calls check(message, sample) for `samples` random messages of each kind (seeded: the
+// same messages every run); returns how many kinds there were.
+template <class Check>
+int forEachRandomMessage(std::uint64_t seed, int samples, Check&& check) {
+  std::mt19937_64 rng(seed);
+  int kinds = 0;
+  forEachMessage([&](auto empty) {
+    ++kinds;
+    for (int sample = 0; sample < samples; ++sample) {
+      decltype(empty) message;
+      fillRandom(message, rng);
+      check(message, sample);
+    }
+  });
+  return kinds;
+}
+
 }  // namespace robodiff::testing
