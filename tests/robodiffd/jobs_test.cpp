@@ -106,14 +106,15 @@ class Jobs : public ::testing::TestWithParam<std::string> {
     return info;
   }
 
-  // The robodiff-worker children of the server that have children of their own: a job
-  // worker while it builds its function (its own worker pool and the compiler).
+  // The robodiff-worker children of the server that have live children of their own: a
+  // job worker while it builds its function (its own worker pool and the compiler). A
+  // killed child not yet reaped (state Z) runs nothing and does not count.
   std::vector<pid_t> busyWorkers() const {
     auto parentOf = [](pid_t pid) -> pid_t {
       std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
       std::string text((std::istreambuf_iterator<char>(stat)), {});
       const auto close = text.rfind(')');
-      if (close == std::string::npos) return -1;
+      if (close == std::string::npos || close + 2 >= text.size() || text[close + 2] == 'Z') return -1;
       return static_cast<pid_t>(std::atol(text.c_str() + close + 4));  // ") S ppid"
     };
     std::vector<pid_t> all;
