@@ -206,9 +206,8 @@ struct Evaluation {
 };
 
 // f's outputs by `backend`; the generated library from the cache unless --no-cache.
-// `spec_text`: as CachedLibraryRequest::spec_text.
 Evaluation evaluateBy(const ComputeOptions& o, const Model& model, const SpecFunction& f, Backend backend,
-                      const std::vector<Eigen::VectorXd>& runtime, const std::string& spec_text = "") {
+                      const std::vector<Eigen::VectorXd>& runtime) {
   if (backend != Backend::Generated) return {f.evaluate(backend, runtime), ""};
   if (o.no_cache) return {f.evaluate(backend, runtime), "off"};
   CachedLibraryRequest request;
@@ -217,7 +216,6 @@ Evaluation evaluateBy(const ComputeOptions& o, const Model& model, const SpecFun
   request.urdf_text = readTextFile(o.robot.urdf, "--urdf");
   request.urdf_source = o.robot.urdf;
   request.floating_base = o.robot.floating_base;
-  request.spec_text = spec_text;
   const std::string robot = model.name.empty() ? o.robot.urdf : model.name;
   const CachedLibrary library = CachedLibrary::open(model, f, request, [&] {
     std::cerr << "building " << f.spec().functionName() << " for " << robot << " into the cache "
@@ -276,8 +274,7 @@ void runUser(const ComputeOptions& o, const FunctionSpec& spec) {
   const SpecFunction f = functionFor(o, model, spec, backend);
   const std::vector<NamedInput> inputs = userInputs(f);
   const auto [runtime, source] = loadUserInputs(o.state, model, spec, inputs);
-  const std::string spec_text = backend == Backend::Generated && !o.no_cache ? readTextFile(o.spec, "--spec") : "";
-  const auto [out, cache] = evaluateBy(o, model, f, backend, runtime, spec_text);
+  const auto [out, cache] = evaluateBy(o, model, f, backend, runtime);
   const bool reference = backend == Backend::Reference;
   if (o.format == "table") {
     std::cout << spec.functionName() << " of " << (model.name.empty() ? o.robot.urdf : model.name)

@@ -24,7 +24,7 @@ bool buildIntoCache(cache::Cache& cache, const FunctionSpec& spec, const std::st
   workers::CachedBuilder builder(cache, pool, options);
   workers::BuildTarget target{request.urdf_source, request.floating_base, "<spec>", ""};
   target.urdf_text = request.urdf_text;
-  target.spec_text = request.spec_text.empty() ? normalizedSpecJson(spec) : request.spec_text;
+  target.spec_text = specJson(spec);  // a spec the worker reads back (a user spec included)
   const workers::BuildStatus done = builder.buildAll({target}).at(0);
   if (done.state == workers::BuildState::Failed)
     throw std::runtime_error("building " + spec.functionName() + " for " + robot + " into the cache " +

@@ -28,9 +28,6 @@ struct CachedLibraryRequest {
   std::string compiler;  // empty: $CC, else cc
   std::string urdf_text, urdf_source;
   bool floating_base = false;
-  // The spec's JSON. Empty: normalizedSpecJson, which parses back to the same built-in
-  // spec; a user spec's normal form is a key, not a spec, so it needs its file's text.
-  std::string spec_text;
 };
 
 class CachedLibrary {
