@@ -59,6 +59,13 @@ rpc::JobState stateFromText(const std::string& s) {
 
 }  // namespace
 
+std::string jobParamsKeepingSpecOrder(const std::string& params_json) {
+  auto ordered = nlohmann::ordered_json::parse(params_json.empty() ? "{}" : params_json, nullptr, false);
+  if (!ordered.is_object()) return "";
+  if (auto it = ordered.find("spec_json"); it != ordered.end() && it->is_object()) *it = it->dump();
+  return ordered.dump();
+}
+
 struct JobManager::Impl {
   // A job this server accepted (finished ones stay, for status and result).
   struct Job {
@@ -230,7 +237,8 @@ JobManager::~JobManager() {
 Status JobManager::submit(const JobCaller& caller, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
   Impl& m = *impl_;
   if (request.kind.empty()) return {StatusCode::InvalidArgument, "SubmitJob: the job's kind is empty"};
-  const json params = json::parse(request.params_json.empty() ? "{}" : request.params_json, nullptr, false);
+  const std::string params_text = jobParamsKeepingSpecOrder(request.params_json);
+  const json params = params_text.empty() ? json() : json::parse(params_text);
   if (!params.is_object())
     return {StatusCode::InvalidArgument, "SubmitJob: params_json is not a JSON object: '" +
                                              request.params_json.substr(0, 120) + "'"};

@@ -48,6 +48,12 @@ struct JobCaller {
   bool operator_ = false;
 };
 
+// A submission's parameters with a "spec_json" object turned into its text in the order
+// written: a user spec's inputs and defines are in order (its calling convention), which
+// the sorted keys of the JSON parameters would change on the way to the job's worker.
+// "" when params_json is not a JSON object.
+std::string jobParamsKeepingSpecOrder(const std::string& params_json);
+
 struct JobCounts {
   std::uint32_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
 };
