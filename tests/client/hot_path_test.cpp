@@ -12,8 +12,9 @@
 
 #include "client/client_fixture.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
-#include "robodiff/workers/build_job.hpp"
+#include "robodiff/model/canonical.hpp"
 
 namespace {
 // Allocations made by the thread that armed the counter (other threads of the process,
@@ -212,7 +213,7 @@ TEST(ClientHotPath, LocalOverheadOverTheCompiledFunction) {
 
   // The same library, called directly.
   const std::string key =
-      workers::prepareBuild(shared.model(), parseFunctionSpec(kRneaJacobianSpec), "", "").key;
+      cache::prepareBuild(shared.model(), canonicalHash(shared.model()), parseFunctionSpec(kRneaJacobianSpec), "", "").key;
   cache::Cache cache = cache::Cache::open(shared.server().cacheDir());
   const std::optional<cache::Artifact> artifact = cache.find(key);
   ASSERT_TRUE(artifact.has_value());

@@ -9,11 +9,12 @@
 #include <cstring>
 #include <thread>
 
-#include "client/client_fixture.hpp"
 #include "../../client/api/src/thread_buffers.hpp"  // the per-thread scratch, looked at below
+#include "client/client_fixture.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
-#include "robodiff/workers/build_job.hpp"
+#include "robodiff/model/canonical.hpp"
 
 namespace robodiff::testing {
 namespace {
@@ -114,7 +115,7 @@ TEST(ClientLocalBatch, GoesThroughTheLibrarysBatchedEntryPoint) {
   const client::Function remote = shm.function(shm.loadModel(arm7Text()), kRneaJacobianSpec);
 
   // The same library, loaded here: it has a batched entry point of several lanes.
-  const std::string key = workers::prepareBuild(shared.model(), parseFunctionSpec(kRneaJacobianSpec), "", "").key;
+  const std::string key = cache::prepareBuild(shared.model(), canonicalHash(shared.model()), parseFunctionSpec(kRneaJacobianSpec), "", "").key;
   cache::Cache cache = cache::Cache::open(shared.server().cacheDir());
   const std::optional<cache::Artifact> artifact = cache.find(key);
   ASSERT_TRUE(artifact.has_value());

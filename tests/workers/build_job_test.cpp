@@ -1,8 +1,6 @@
-// Build jobs in this process: the cache key's sensitivity (prepareBuild), a real build
-// published into a real cache and loaded back, failures classified and cleaned up, and
-// the JSON that carries requests and outcomes between processes.
-#include <regex>
-
+// Build jobs in this process: a real build published into a real cache and loaded back,
+// failures classified and cleaned up, and the JSON that carries requests and outcomes
+// between processes. (The key's recipe: tests/cache/prepared_build_test.cpp.)
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -23,48 +21,7 @@ std::string rneaJacobianSpec(const std::string& optimization = "O0", bool native
   return spec.dump();
 }
 
-PreparedBuild prepare(const std::string& urdf, const std::string& spec, const std::string& name = "") {
-  return prepareBuild(loadUrdfString(urdf, RootJoint::Fixed, "arm7.urdf"), parseFunctionSpec(spec, "spec"), name, "");
-}
-
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-TEST(BuildJob, TheSameRobotWrittenDifferentlyHasTheSameKey) {
-  const std::string urdf = testing::arm7Urdf();
-  std::string reformatted = std::regex_replace(urdf, std::regex("\n"), "\n\n    ");
-  reformatted = std::regex_replace(reformatted, std::regex("/>"), "   />");
-  ASSERT_NE(reformatted, urdf);
-  const PreparedBuild a = prepare(urdf, rneaJacobianSpec());
-  const PreparedBuild b = prepare(reformatted, rneaJacobianSpec());
-  EXPECT_EQ(a.key, b.key);
-  EXPECT_TRUE(cache::isCacheKey(a.key)) << a.key;
-}
-
-TEST(BuildJob, AChangedMassChangesTheKey) {
-  const std::string urdf = testing::arm7Urdf();
-  const std::string heavier = std::regex_replace(urdf, std::regex("mass value=\"2.3056640625\""), "mass value=\"2.7\"",
-                                                 std::regex_constants::format_first_only);
-  ASSERT_NE(heavier, urdf) << "arm7.urdf changed: pick another mass to edit";
-  EXPECT_NE(prepare(urdf, rneaJacobianSpec()).key, prepare(heavier, rneaJacobianSpec()).key);
-}
-
-TEST(BuildJob, BuildOptionsAndTheFunctionNameChangeTheKey) {
-  const std::string urdf = testing::arm7Urdf();
-  const PreparedBuild base = prepare(urdf, rneaJacobianSpec("O0"));
-  EXPECT_NE(base.key, prepare(urdf, rneaJacobianSpec("O1")).key) << "optimisation level";
-  EXPECT_NE(base.key, prepare(urdf, rneaJacobianSpec("O0", true)).key) << "-march=native";
-  EXPECT_NE(base.key, prepare(urdf, rneaJacobianSpec("O0"), "arm_rnea").key) << "the C name";
-  EXPECT_EQ(base.key, prepare(urdf, rneaJacobianSpec("O0")).key) << "the key is not deterministic";
-
-  EXPECT_EQ(base.info.robot, "arm7");
-  EXPECT_EQ(base.info.function, "rnea");
-  EXPECT_EQ(prepare(urdf, rneaJacobianSpec("O0"), "arm_rnea").info.function, "arm_rnea");
-  EXPECT_EQ(base.info.model_hash, base.identity.model_hash);
-  EXPECT_EQ(base.info.spec, base.identity.spec);
-  EXPECT_TRUE(contains(base.info.compiler, base.identity.compiler + " -O0")) << base.info.compiler;
-  EXPECT_TRUE(contains(base.identity.generator, codegen::kGeneratorVersion)) << base.identity.generator;
-  EXPECT_EQ(base.key, base.identity.key());
-}
 
 TEST(BuildJob, ABuildIsPublishedAndLoadsBack) {
   TempDir dir;

@@ -14,7 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/functions/function_spec.hpp"
+#include "robodiff/model/canonical.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 #include "robodiff/workers/build_job.hpp"
 #include "support/temp_dir.hpp"
@@ -86,7 +88,7 @@ inline std::filesystem::path failingCompiler(const TempDir& dir) {
 
 // A build request for (urdf, spec) claimed in `cache`, as the requesting process makes it.
 struct ClaimedBuild {
-  workers::PreparedBuild prepared;
+  cache::PreparedBuild prepared;
   workers::BuildRequest request;
 };
 
@@ -94,7 +96,7 @@ inline ClaimedBuild claimBuild(cache::Cache& cache, const std::string& urdf, con
                                const std::string& compiler = {}) {
   const Model model = loadUrdfString(urdf, RootJoint::Fixed, "arm7.urdf");
   const FunctionSpec spec = parseFunctionSpec(spec_text, "test spec");
-  ClaimedBuild b{workers::prepareBuild(model, spec, "", compiler), {}};
+  ClaimedBuild b{cache::prepareBuild(model, canonicalHash(model), spec, "", compiler), {}};
   const cache::ClaimResult claimed = cache.claim(b.prepared.key, b.prepared.info);
   if (claimed.state != cache::ClaimResult::State::Claimed)
     throw std::runtime_error("claimBuild: the key " + b.prepared.key + " is not free in the test cache");

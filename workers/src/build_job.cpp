@@ -1,8 +1,6 @@
 #include "robodiff/workers/build_job.hpp"
 
 #include <algorithm>
-#include <map>
-#include <mutex>
 #include <new>
 
 #include <nlohmann/json.hpp>
@@ -103,50 +101,6 @@ cache::EntryInfo entryInfoFromJson(const json& j, const std::string& where) {
   f.optional("compiler", info.compiler);
   f.optional("build_seconds", info.build_seconds);
   return info;
-}
-
-// --- the build identity ---
-
-const char* methodName(AbaJacobianMethod m) { return m == AbaJacobianMethod::Analytic ? "analytic" : "differentiate"; }
-const char* methodName(RneaJacobianMethod m) {
-  switch (m) {
-    case RneaJacobianMethod::Analytic: return "analytic";
-    case RneaJacobianMethod::Differentiate: return "differentiate";
-    case RneaJacobianMethod::Cheaper: return "cheaper";
-  }
-  return "unknown";
-}
-
-// The generator's version and every builder and codegen option that changes the code
-// generated for the same model and spec (the C name included: it is in the library).
-std::string generatorIdentity(const LibraryOptions& options, const std::string& c_name) {
-  const FunctionBuilderOptions& b = options.builder;
-  const codegen::CodegenOptions& c = options.codegen;
-  return std::string(codegen::kGeneratorVersion) + "; name=" + c_name + "; aba_jacobian=" +
-         methodName(b.aba_jacobian) + "; rnea_jacobian=" + methodName(b.rnea_jacobian) +
-         "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) +
-         "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
-         "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
-}
-
-// The compiler's identity, asked once per compiler program in this process.
-std::string cachedCompilerIdentity(const codegen::CompilerOptions& options) {
-  static std::mutex mutex;
-  static std::map<std::string, std::string> known;
-  const std::string program = codegen::compilerProgram(options);
-  {
-    std::lock_guard lock(mutex);
-    if (const auto it = known.find(program); it != known.end()) return it->second;
-  }
-  std::string identity = codegen::compilerIdentity(options);  // slow: outside the lock
-  std::lock_guard lock(mutex);
-  return known.emplace(program, std::move(identity)).first->second;
-}
-
-std::string joined(const std::vector<std::string>& words) {
-  std::string text;
-  for (const auto& w : words) text += (text.empty() ? "" : " ") + w;
-  return text;
 }
 
 // {"inputs": [doubles per block], "outputs": [doubles written per block]}
@@ -259,31 +213,6 @@ BuildOutcome buildOutcomeFromJson(const std::string& json_text) {
 
 // --- preparing and running a build ---
 
-PreparedBuild prepareBuild(const Model& model, const FunctionSpec& spec, const std::string& function_name,
-                           const std::string& compiler) {
-  PreparedBuild p;
-  if (!function_name.empty()) p.options.builder.name = function_name;
-  p.options.compiler.compiler = compiler;
-  // The C name buildFunction gives the function.
-  const std::string c_name = function_name.empty() ? spec.functionName() : function_name;
-  const codegen::CompilerOptions effective = compilerOptionsFor(spec.build, p.options.compiler);
-
-  p.identity.model_hash = canonicalHash(model);
-  p.identity.spec = normalizedSpecJson(spec);
-  p.identity.generator = generatorIdentity(p.options, c_name);
-  p.identity.compiler = cachedCompilerIdentity(effective);
-  p.identity.flags = codegen::compilerFlags(effective);
-  p.identity.target_cpu = cache::targetCpuIdentity(spec.build.march_native);
-  p.key = p.identity.key();
-
-  p.info.model_hash = p.identity.model_hash;
-  p.info.robot = model.name;
-  p.info.function = c_name;
-  p.info.spec = p.identity.spec;
-  p.info.compiler = p.identity.compiler + " " + joined(p.identity.flags);
-  return p;  // info.sizes: known once built (executeBuild fills it)
-}
-
 BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(const std::string& stage)>& progress) {
   const auto started = Clock::now();
   auto stage = [&](const char* name) {
@@ -297,7 +226,8 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
     const Model model = loadUrdfString(request.urdf, request.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed,
                                        request.urdf_source.empty() ? "<string>" : request.urdf_source);
     const FunctionSpec spec = parseFunctionSpec(request.spec, request.spec_source.empty() ? "<spec>" : request.spec_source);
-    PreparedBuild prepared = prepareBuild(model, spec, request.function_name, request.compiler);
+    const cache::PreparedBuild prepared =
+        cache::prepareBuild(model, canonicalHash(model), spec, request.function_name, request.compiler);
     if (prepared.key != request.claim.key) {
       fail(outcome, "internal",
            "the worker computed the key " + prepared.key + " for this build but the claim is for " +

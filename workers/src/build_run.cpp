@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/model/canonical.hpp"
 #include "robodiff/model/urdf_loader.hpp"
 #include "robodiff/workers/worker_protocol.hpp"
 
@@ -139,15 +140,18 @@ void BuildRun::prepareAll(const std::vector<BuildTarget>& targets) {
 }
 
 void BuildRun::prepare(std::size_t i, const BuildTarget& t, Robot& robot) {
-  if (!robot.model) {
+  if (!robot.model && t.model && !t.urdf_text.empty() && !t.model_hash.empty()) {
+    robot = {t.urdf_text, t.model, t.model_hash};  // parsed and hashed by the caller
+  } else if (!robot.model) {
     robot.urdf = t.urdf_text.empty() ? readText(t.urdf_path, "URDF") : t.urdf_text;
-    robot.model = std::make_shared<Model>(
+    robot.model = std::make_shared<const Model>(
         loadUrdfString(robot.urdf, t.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, t.urdf_path));
+    robot.hash = canonicalHash(*robot.model);
   }
   const std::string spec_text = t.spec_text.empty() ? readText(t.spec_path, "spec") : t.spec_text;
   const FunctionSpec spec = parseFunctionSpec(spec_text, t.spec_path);
   Work& w = work_[i];
-  w.prepared = prepareBuild(*robot.model, spec, t.function_name, options_.compiler);
+  w.prepared = cache::prepareBuild(*robot.model, robot.hash, spec, t.function_name, options_.compiler);
   w.status.robot = w.prepared->info.robot;
   w.status.function = w.prepared->info.function;
   w.status.key = w.prepared->key;

@@ -34,7 +34,7 @@ class BuildRun {
     BuildTarget target;
     BuildStatus status;
     Clock::time_point started;
-    std::optional<PreparedBuild> prepared;
+    std::optional<cache::PreparedBuild> prepared;
     BuildRequest request;               // all but the claim, filled when prepared
     std::optional<cache::Claim> claim;  // held by this process while a worker builds
     std::optional<JobHandle> job;
@@ -43,7 +43,8 @@ class BuildRun {
   };
   struct Robot {
     std::string urdf;
-    std::shared_ptr<Model> model;
+    std::shared_ptr<const Model> model;
+    std::string hash;  // canonicalHash(*model), once per robot
   };
 
   // The "caller holds mutex_" helpers.

@@ -10,9 +10,11 @@
 #include <thread>
 
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/codegen/interpreter.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/functions/function_builder.hpp"
+#include "robodiff/model/canonical.hpp"
 #include "robodiff/runtime/cached_function.hpp"
 #include "robodiff/runtime/function_layout.hpp"
 #include "robodiff/workers/build_job.hpp"
@@ -135,7 +137,8 @@ void openCompiled(BatchFunction::Impl& impl, const Model& model, const std::stri
     if (options.on_progress) options.on_progress(what);
   };
   cache::Cache cache = cache::Cache::open(options.cache_dir.empty() ? cache::defaultCacheDir() : options.cache_dir);
-  const workers::PreparedBuild prepared = workers::prepareBuild(model, spec, "", options.compiler);
+  const std::string model_hash = canonicalHash(model);
+  const cache::PreparedBuild prepared = cache::prepareBuild(model, model_hash, spec, "", options.compiler);
   std::optional<cache::Artifact> artifact = cache.find(prepared.key);
   if (artifact) {
     tell("cached");
@@ -149,6 +152,8 @@ void openCompiled(BatchFunction::Impl& impl, const Model& model, const std::stri
     workers::CachedBuilder builder(cache, pool, builder_options);
     workers::BuildTarget target{"<urdf>", floating_base, "<spec>", ""};
     target.urdf_text = urdf_text;
+    target.model = std::make_shared<const Model>(model);  // a copy: cheaper than parsing again
+    target.model_hash = model_hash;
     target.spec_text = specJson(spec);  // a user spec's normalised JSON is a key, not a spec
     const std::vector<workers::BuildStatus> done = builder.buildAll({target});
     if (done.at(0).state == workers::BuildState::Failed)

@@ -6,7 +6,7 @@
 #include "client_impl.hpp"
 #include "robodiff/model/canonical.hpp"
 #include "robodiff/model/urdf_loader.hpp"
-#include "robodiff/workers/build_job.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 
 namespace robodiff::client {
 namespace {
@@ -127,11 +127,11 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
   if (!spec_parsed) {
     if (!from_server) throw ClientError({StatusCode::InvalidArgument, spec_problem});
   } else if (c.localCapable()) {
-    // The key the server builds under (prepareBuild with function name "" and the
-    // default compiler), computed from the model parsed here.
+    // The key the server builds under (cache::prepareBuild with function name "" and
+    // the default compiler), computed from the model parsed and hashed here.
     std::string key_problem;
     try {
-      f->key = workers::prepareBuild(*c.localModel(model.id), f->spec, "", "").key;
+      f->key = cache::prepareBuild(*c.localModel(model.id), model.id, f->spec, "", "").key;
     } catch (const ClientError&) {
       throw;
     } catch (const std::exception& e) {

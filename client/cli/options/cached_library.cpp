@@ -5,7 +5,9 @@
 #include <stdexcept>
 
 #include "options/cache_location.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/functions/evaluation.hpp"
+#include "robodiff/model/canonical.hpp"
 #include "robodiff/runtime/cached_function.hpp"
 #include "robodiff/workers/build_job.hpp"
 #include "robodiff/workers/cached_builder.hpp"
@@ -16,14 +18,17 @@ namespace {
 
 // Builds the key in `cache` in one robodiff-worker process, as warmup does. True when this
 // call built it; false when another process had built it meanwhile (found on claiming).
-bool buildIntoCache(cache::Cache& cache, const FunctionSpec& spec, const std::string& robot,
+bool buildIntoCache(cache::Cache& cache, const Model& model, const std::string& model_hash, const FunctionSpec& spec,
                     const CachedLibraryRequest& request) {
+  const std::string robot = model.name.empty() ? request.urdf_source : model.name;
   workers::WorkerPool pool(workers::WorkerPoolOptions{});
   workers::CachedBuilderOptions options;
   options.compiler = request.compiler;
   workers::CachedBuilder builder(cache, pool, options);
   workers::BuildTarget target{request.urdf_source, request.floating_base, "<spec>", ""};
   target.urdf_text = request.urdf_text;
+  target.model = std::make_shared<const Model>(model);  // a copy: cheaper than parsing again
+  target.model_hash = model_hash;
   target.spec_text = specJson(spec);  // a spec the worker reads back (a user spec included)
   const workers::BuildStatus done = builder.buildAll({target}).at(0);
   if (done.state == workers::BuildState::Failed)
@@ -63,13 +68,14 @@ void expectSameBlocks(const codegen::CompiledFunction& function, const codegen::
 CachedLibrary CachedLibrary::open(const Model& model, const SpecFunction& f, const CachedLibraryRequest& request,
                                   const std::function<void()>& on_building) {
   cache::Cache cache = openCliCache(request.cache_dir, "", true);
-  const workers::PreparedBuild prepared = workers::prepareBuild(model, f.spec(), "", request.compiler);
+  const std::string model_hash = canonicalHash(model);
+  const cache::PreparedBuild prepared = cache::prepareBuild(model, model_hash, f.spec(), "", request.compiler);
   // find() checks the library's SHA-256; a corrupt one is quarantined and reported a miss.
   std::optional<cache::Artifact> artifact = cache.find(prepared.key);
   bool hit = artifact.has_value();
   if (!artifact) {
     if (on_building) on_building();
-    hit = !buildIntoCache(cache, f.spec(), model.name.empty() ? request.urdf_source : model.name, request);
+    hit = !buildIntoCache(cache, model, model_hash, f.spec(), request);
     artifact = cache.find(prepared.key);
     if (!artifact)
       throw std::runtime_error("the build of " + f.spec().functionName() +

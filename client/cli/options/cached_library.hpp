@@ -1,5 +1,5 @@
 // compute's generated backend through the content-addressed cache: the library of
-// (robot, spec) is found by the key `warmup` and robodiffd use (workers::prepareBuild),
+// (robot, spec) is found by the key `warmup` and robodiffd use (cache::prepareBuild),
 // its SHA-256 checked by cache::Cache::find (a missing or corrupt library is moved to
 // quarantine and rebuilt, never loaded), and built when missing by a robodiff-worker
 // process through workers::CachedBuilder (one build per key across every process

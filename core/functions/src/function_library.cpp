@@ -78,15 +78,15 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   result.compile = codegen::compileLibrary(sources, result.library, compiler);
   result.library_bytes = fs::file_size(result.library);
   result.description = out_dir / (name + ".json");
-  writeFile(result.description, describeFunction(model, spec, result.built, &result) + "\n");
+  writeFile(result.description, describeFunction(model, spec, result.built, &result, options.model_hash) + "\n");
   return result;
 }
 
 std::string describeFunction(const Model& model, const FunctionSpec& spec, const BuiltFunction& built,
-                             const GeneratedFunctionLibrary* generated) {
+                             const GeneratedFunctionLibrary* generated, const std::string& model_hash) {
   json d;
   d["name"] = built.definition.name;
-  d["model"] = {{"name", model.name}, {"nq", model.nq}, {"nv", model.nv}, {"hash", canonicalHash(model)}};
+  d["model"] = {{"name", model.name}, {"nq", model.nq}, {"nv", model.nv}, {"hash", model_hash.empty() ? canonicalHash(model) : model_hash}};
   d["spec"] = json::parse(normalizedSpecJson(spec));
   json inputs = json::array();
   for (const codegen::InputBlock& b : built.definition.inputs) inputs.push_back({{"name", b.name}, {"size", b.size}});

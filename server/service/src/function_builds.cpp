@@ -8,7 +8,7 @@
 #include "robodiff/functions/function_library.hpp"
 #include "robodiff/language/bounded_text.hpp"
 #include "robodiff/symbolic/graph.hpp"
-#include "robodiff/workers/build_job.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 
 namespace robodiff::server::detail {
 namespace {
@@ -149,9 +149,9 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   // another server sharing the cache).
   std::string key_problem;
   if (settings_.compile) {
-    std::optional<workers::PreparedBuild> prepared;
+    std::optional<cache::PreparedBuild> prepared;
     try {
-      prepared = workers::prepareBuild(model, f.spec(), "", settings_.compiler);
+      prepared = cache::prepareBuild(model, f.model().id, f.spec(), "", settings_.compiler);
     } catch (const std::exception& e) {
       key_problem = e.what();  // e.g. the compiler cannot be run: the interpreter serves
     }
@@ -247,6 +247,8 @@ void FunctionBuilds::compile(const std::shared_ptr<FunctionEntry>& function) {
   target.floating_base = f.model().floating_base;
   target.spec_path = "spec of function " + f.id();
   target.urdf_text = f.model().urdf;
+  target.model = f.model().model;  // parsed and hashed once, at LoadModel
+  target.model_hash = f.model().id;
   target.spec_text = f.specText();
 
   std::atomic<bool> running{false};

@@ -1,7 +1,7 @@
 // A build job: a robot and a function spec -> a compiled library published in the cache.
 //
-// The requesting process prepares it (prepareBuild: the cache key and the index row,
-// computed from the canonical model and the normalised spec), claims the key in the
+// The requesting process prepares it (cache::prepareBuild: the cache key and the index
+// row, computed from the canonical model and the normalised spec), claims the key in the
 // cache, and sends the job to a worker; the worker runs executeBuild: load the URDF,
 // trace, differentiate, emit, compile (the compiler is the worker's child), publish to
 // the cache under the claim. The request travels as JSON (toJson / buildRequestFromJson).
@@ -13,7 +13,7 @@
 #include <string>
 
 #include "robodiff/cache/cache.hpp"
-#include "robodiff/cache/cache_key.hpp"
+#include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/functions/function_library.hpp"
 #include "robodiff/functions/function_spec.hpp"
 #include "robodiff/model/model.hpp"
@@ -41,20 +41,6 @@ struct BuildRequest {
 std::string toJson(const BuildRequest& request);
 // Throws std::invalid_argument naming the missing or mistyped field.
 BuildRequest buildRequestFromJson(const std::string& json_text);
-
-// What the requesting process knows before any building.
-struct PreparedBuild {
-  cache::BuildIdentity identity;
-  std::string key;
-  cache::EntryInfo info;
-  LibraryOptions options;  // as the worker will use them
-};
-
-// The identity and index row of (model, spec) built with `compiler` (program, limits).
-// Runs the compiler once per process to learn its identity (then remembered). Throws
-// codegen::CompileError(CannotRun) when the compiler cannot be run.
-PreparedBuild prepareBuild(const Model& model, const FunctionSpec& spec, const std::string& function_name,
-                           const std::string& compiler);
 
 // The outcome of a build, as the worker reports it.
 struct BuildOutcome {

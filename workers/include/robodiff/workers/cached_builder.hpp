@@ -14,18 +14,23 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/model/model.hpp"
 #include "robodiff/workers/worker_pool.hpp"
 
 namespace robodiff::workers {
 
 // A robot and a spec to build, read from files, or given as text (a server has them
 // in memory): when urdf_text / spec_text is set it is used, and the path then only names
-// the source in messages. (The text fields have initialisers so that brace-initialising
-// only the first four stays free of -Wmissing-field-initializers.)
+// the source in messages. A caller that has parsed the robot already (robodiffd) passes
+// the model and its canonical hash too, so that it is neither parsed nor hashed again
+// here (the worker still parses the text: it is another process). (The fields after the
+// first four have initialisers so that brace-initialising only those stays free of
+// -Wmissing-field-initializers.)
 struct BuildTarget {
   std::string urdf_path;
   bool floating_base = false;
@@ -33,6 +38,8 @@ struct BuildTarget {
   std::string function_name;  // C name; empty: the spec's function
   std::string urdf_text = {};  // set: the URDF itself (urdf_path is not read)
   std::string spec_text = {};  // set: the spec's JSON itself (spec_path is not read)
+  std::shared_ptr<const Model> model = {};  // set (with urdf_text and model_hash): urdf_text parsed
+  std::string model_hash = {};              // canonicalHash(*model)
 };
 
 enum class BuildState : std::uint8_t {

@@ -25,6 +25,9 @@ struct LibraryOptions {
   // Compiler, limits and jobs. The optimisation level, -march=native and -ffast-math
   // come from the spec's build options (compilerOptionsFor), not from here.
   codegen::CompilerOptions compiler;
+  // canonicalHash(model) when the caller has it (hashed once where the model was loaded);
+  // empty: the description computes it.
+  std::string model_hash;
   // Told each step as it starts: "trace" (build the function), then "compile" (emit C done,
   // compiler running). Build workers report it as progress.
   std::function<void(const char* stage)> on_stage;
@@ -54,6 +57,6 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
 // the normalised spec, input blocks, output blocks (shape, layout, nnz, CSR pattern of
 // sparse blocks), how it was built, and the generation figures when given.
 std::string describeFunction(const Model& model, const FunctionSpec& spec, const BuiltFunction& built,
-                             const GeneratedFunctionLibrary* generated = nullptr);
+                             const GeneratedFunctionLibrary* generated = nullptr, const std::string& model_hash = {});
 
 }  // namespace robodiff

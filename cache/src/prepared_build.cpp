@@ -1,0 +1,81 @@
+#include "robodiff/cache/prepared_build.hpp"
+
+#include <map>
+#include <mutex>
+
+#include "robodiff/codegen/compiler.hpp"
+
+namespace robodiff::cache {
+namespace {
+
+const char* methodName(AbaJacobianMethod m) { return m == AbaJacobianMethod::Analytic ? "analytic" : "differentiate"; }
+const char* methodName(RneaJacobianMethod m) {
+  switch (m) {
+    case RneaJacobianMethod::Analytic: return "analytic";
+    case RneaJacobianMethod::Differentiate: return "differentiate";
+    case RneaJacobianMethod::Cheaper: return "cheaper";
+  }
+  return "unknown";
+}
+
+// The generator's version and every builder and codegen option that changes the code
+// generated for the same model and spec (the C name included: it is in the library).
+std::string generatorIdentity(const LibraryOptions& options, const std::string& c_name) {
+  const FunctionBuilderOptions& b = options.builder;
+  const codegen::CodegenOptions& c = options.codegen;
+  return std::string(codegen::kGeneratorVersion) + "; name=" + c_name + "; aba_jacobian=" +
+         methodName(b.aba_jacobian) + "; rnea_jacobian=" + methodName(b.rnea_jacobian) +
+         "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) +
+         "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
+         "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
+}
+
+// The compiler's identity, asked once per compiler program in this process.
+std::string cachedCompilerIdentity(const codegen::CompilerOptions& options) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> known;
+  const std::string program = codegen::compilerProgram(options);
+  {
+    std::lock_guard lock(mutex);
+    if (const auto it = known.find(program); it != known.end()) return it->second;
+  }
+  std::string identity = codegen::compilerIdentity(options);  // slow: outside the lock
+  std::lock_guard lock(mutex);
+  return known.emplace(program, std::move(identity)).first->second;
+}
+
+std::string spaceSeparated(const std::vector<std::string>& words) {
+  std::string text;
+  for (const auto& w : words) text += (text.empty() ? "" : " ") + w;
+  return text;
+}
+
+}  // namespace
+
+PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,
+                           const std::string& function_name, const std::string& compiler) {
+  PreparedBuild p;
+  if (!function_name.empty()) p.options.builder.name = function_name;
+  p.options.compiler.compiler = compiler;
+  p.options.model_hash = model_hash;
+  // The C name buildFunction gives the function.
+  const std::string c_name = function_name.empty() ? spec.functionName() : function_name;
+  const codegen::CompilerOptions effective = compilerOptionsFor(spec.build, p.options.compiler);
+
+  p.identity.model_hash = model_hash;
+  p.identity.spec = normalizedSpecJson(spec);
+  p.identity.generator = generatorIdentity(p.options, c_name);
+  p.identity.compiler = cachedCompilerIdentity(effective);
+  p.identity.flags = codegen::compilerFlags(effective);
+  p.identity.target_cpu = targetCpuIdentity(spec.build.march_native);
+  p.key = p.identity.key();
+
+  p.info.model_hash = model_hash;
+  p.info.robot = model.name;
+  p.info.function = c_name;
+  p.info.spec = p.identity.spec;
+  p.info.compiler = p.identity.compiler + " " + spaceSeparated(p.identity.flags);
+  return p;
+}
+
+}  // namespace robodiff::cache
