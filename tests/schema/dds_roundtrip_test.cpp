@@ -20,7 +20,7 @@
 
 #include <dds/dds.h>
 
-#include "robodiff.h"  // generated from schema/robodiff.idl
+#include "robodiff.h"  // idlc's C types of build/schema/robodiff.idl
 #include "robodiff/schema/status.hpp"
 #include "support/test_paths.hpp"
 

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "robodiff.h"  // generated from schema/robodiff.idl
+#include "robodiff.h"  // idlc's C types of build/schema/robodiff.idl
 #include "robodiff/schema/status.hpp"
 
 namespace robodiff {

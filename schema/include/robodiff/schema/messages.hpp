@@ -1,10 +1,12 @@
 #pragma once
-// The service's messages in C++: one struct per IDL type of schema/robodiff.idl, with the
-// same fields in the same order, each followed by its field list (field_list.hpp), from
-// which both transports' codecs are derived (dds_codec.hpp: the idlc-generated C types;
-// shm_codec.hpp: flat shared-memory chunks); the server and the client work only with
-// these. Adding a field: the struct, its ROBODIFF_FIELDS line and robodiff.idl (a test
-// checks that the IDL and these lists agree).
+// The service's messages: the one description of every wire struct. Each struct is followed
+// by its field list (field_list.hpp), from which everything else is derived: the IDL structs
+// for idlc (written at build time into robodiff.idl by robodiff_idl_writer, idl_writer.hpp),
+// the DDS codec (dds_codec.hpp: to and from the idlc-generated C types) and the iceoryx codec
+// (shm_codec.hpp: flat shared-memory chunks). The server and the client work only with
+// these. Adding a field: the struct and its ROBODIFF_FIELDS line here, nothing else (the
+// codecs' tests fill and compare every field through the same lists). A new enum also needs
+// its values in schema/robodiff.idl.in and an idlName / valueCount pair below.
 //
 // Evaluate and EvaluateBatch carry their doubles outside these structs (spans over the
 // transport's buffers) so that iceoryx can serve them without copying the payload; see
@@ -35,9 +37,12 @@ enum class Method : std::uint32_t {  // robodiff_wire_Method
 inline constexpr std::uint32_t kMethodCount = 11;
 const char* toString(Method method);  // "LoadModel", ...
 
-// valueCount(e): how many values an enum has (the codecs refuse others off the wire).
+// valueCount(e): how many values an enum has (the codecs refuse others off the wire);
+// idlName(e): the enum's name in robodiff.idl.in (the generated IDL types a field by it).
 constexpr std::uint32_t valueCount(Method) { return kMethodCount; }
 constexpr std::uint32_t valueCount(StatusCode) { return kStatusCodeCount; }
+constexpr const char* idlName(Method) { return "Method"; }
+constexpr const char* idlName(StatusCode) { return "StatusCode"; }
 
 ROBODIFF_FIELDS(Status, code, message);
 
@@ -50,18 +55,21 @@ ROBODIFF_FIELDS(SchemaVersion, major, minor);
 struct RequestHeader {
   SchemaVersion schema_version;
   std::string client_id;               // unique per client process / instance
-  std::uint64_t correlation_id = 0;    // unique per client
-  std::uint64_t deadline_budget_ns = 0;  // relative, from when the server takes it; 0 = none
-  std::string server_instance_id;      // empty = any server
+  std::uint64_t correlation_id = 0;    // chosen by the client, unique per client
+  // Counted from when the server takes the request; 0 = none. Relative (as gRPC's
+  // grpc-timeout) so that the hosts' clocks need not agree; the client enforces its own
+  // absolute deadline.
+  std::uint64_t deadline_budget_ns = 0;
+  std::string server_instance_id;      // the server asked; empty = any server
 };
 ROBODIFF_FIELDS(RequestHeader, schema_version, client_id, correlation_id, deadline_budget_ns, server_instance_id);
 
 struct ReplyHeader {
   SchemaVersion schema_version;        // the server's
   std::string server_instance_id;
-  std::string client_id;
-  std::uint64_t correlation_id = 0;
-  Status status;
+  std::string client_id;               // copied from the request
+  std::uint64_t correlation_id = 0;    // copied from the request
+  Status status;                       // non-OK: the body is still the method's (maybe empty) reply
 };
 ROBODIFF_FIELDS(ReplyHeader, schema_version, server_instance_id, client_id, correlation_id, status);
 
@@ -69,8 +77,8 @@ ROBODIFF_FIELDS(ReplyHeader, schema_version, server_instance_id, client_id, corr
 
 struct LoadModelRequest {
   std::string urdf;                    // URDF text
-  bool floating_base = false;
-  std::string options_json;            // empty = defaults
+  bool floating_base = false;          // add a free-flyer root joint
+  std::string options_json;            // further options, a JSON object; empty = defaults
 };
 ROBODIFF_FIELDS(LoadModelRequest, urdf, floating_base, options_json);
 
@@ -91,15 +99,18 @@ const char* toString(FunctionState state);  // "READY", "BUILDING", "FAILED"
 constexpr std::uint32_t valueCount(FunctionState) { return 3; }
 constexpr std::uint32_t valueCount(OutputKind) { return 3; }
 constexpr std::uint32_t valueCount(OutputLayout) { return 2; }
+constexpr const char* idlName(FunctionState) { return "FunctionState"; }
+constexpr const char* idlName(OutputKind) { return "OutputKind"; }
+constexpr const char* idlName(OutputLayout) { return "OutputLayout"; }
 
 struct InputBlock {
-  std::string name;
+  std::string name;                    // q, v, a, tau, weights, ...
   std::uint32_t size = 0;              // doubles
 };
 ROBODIFF_FIELDS(InputBlock, name, size);
 
 struct OutputBlock {
-  std::string name;
+  std::string name;                    // value, jacobian, hessian, ...
   OutputKind kind = OutputKind::Value;
   std::uint32_t rows = 0, cols = 0;
   OutputLayout layout = OutputLayout::DenseRowMajor;
@@ -111,7 +122,7 @@ ROBODIFF_FIELDS(OutputBlock, name, kind, rows, cols, layout, nnz, row_offsets, c
 
 struct GetFunctionRequest {
   std::string model_id;
-  std::string spec_json;
+  std::string spec_json;               // a function spec (schema/function-spec.schema.json)
   bool wait = false;                   // reply when READY / FAILED (or at the deadline)
 };
 ROBODIFF_FIELDS(GetFunctionRequest, model_id, spec_json, wait);
@@ -132,12 +143,12 @@ std::uint32_t outputCount(const GetFunctionReply& function);
 
 struct EvaluateRequest {
   std::string function_id;
-  std::vector<double> inputs;          // used where a transport copies (DDS); concatenated blocks
+  std::vector<double> inputs;          // used where a transport copies (DDS); every block, in order
 };
 ROBODIFF_FIELDS(EvaluateRequest, function_id, inputs);
 
 struct EvaluateReply {
-  std::vector<double> outputs;
+  std::vector<double> outputs;         // every output block, in order
 };
 ROBODIFF_FIELDS(EvaluateReply, outputs);
 
@@ -148,10 +159,13 @@ struct EvaluateBatchRequest {
 };
 ROBODIFF_FIELDS(EvaluateBatchRequest, function_id, knot_count, inputs);
 
+// A batch reply may be split into chunk_count replies at knot boundaries, each with the
+// request's correlation id; chunk i holds knots [first_knot, first_knot + knot_count). A
+// non-OK status ends the reply at once.
 struct EvaluateBatchReply {
-  std::uint32_t chunk_index = 0, chunk_count = 1;
-  std::uint32_t total_knots = 0, first_knot = 0, knot_count = 0;
-  std::vector<double> outputs;
+  std::uint32_t chunk_index = 0, chunk_count = 1;  // 0 .. chunk_count - 1; chunk_count >= 1
+  std::uint32_t total_knots = 0, first_knot = 0, knot_count = 0;  // total: the request's knots
+  std::vector<double> outputs;         // knot_count knots, each the concatenated output blocks
 };
 ROBODIFF_FIELDS(EvaluateBatchReply, chunk_index, chunk_count, total_knots, first_knot, knot_count, outputs);
 
@@ -172,7 +186,7 @@ ROBODIFF_FIELDS(ListFunctionsRequest, model_id, page_size, page_token);
 struct FunctionSummary {
   std::string function_id;
   std::string model_id;
-  std::string function_name;
+  std::string function_name;           // rnea, aba, ...
   FunctionState state = FunctionState::Building;
   bool compiled = false;               // false while the interpreter serves it
   std::uint64_t evaluations = 0;       // knots evaluated
@@ -190,23 +204,27 @@ ROBODIFF_FIELDS(ListFunctionsReply, functions, next_page_token, total);
 // ---- Release ------------------------------------------------------------------------
 
 // Each LoadModel / GetFunction that returns an id takes a reference; Release gives one
-// back. A function keeps its model alive; an unreferenced function is unloaded.
+// back. A function keeps its model alive (after the model's last reference is gone); an
+// unreferenced function is unloaded.
 struct ReleaseRequest {
   std::string id;                      // a model_id or a function_id
 };
 ROBODIFF_FIELDS(ReleaseRequest, id);
 
 struct ReleaseReply {
-  std::uint32_t references_left = 0;
+  std::uint32_t references_left = 0;   // 0: unloaded
 };
 ROBODIFF_FIELDS(ReleaseReply, references_left);
 
 // ---- Jobs ---------------------------------------------------------------------------
 
-// Batch work in worker processes (schema/README.md: the kinds and their JSON).
+// Batch work in worker processes: a function along a trajectory, identifying inertial
+// parameters, optimising a trajectory. Parameters and result summary are JSON (the kinds
+// and their fields: docs/jobs.md); result files are written on the server's host.
 enum class JobState : std::uint32_t { Queued = 0, Running = 1, Succeeded = 2, Failed = 3, Cancelled = 4 };
 const char* toString(JobState state);  // "QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"
 constexpr std::uint32_t valueCount(JobState) { return 5; }
+constexpr const char* idlName(JobState) { return "JobState"; }
 inline bool isFinal(JobState s) { return s != JobState::Queued && s != JobState::Running; }
 
 struct SubmitJobRequest {
@@ -225,9 +243,9 @@ struct JobInfo {
   std::string kind;
   JobState state = JobState::Queued;
   double progress = 0;                 // 0 .. 1
-  double elapsed_seconds = 0;          // since it started running
-  double eta_seconds = -1;             // < 0: unknown
-  std::vector<std::string> messages;   // the latest few, oldest first
+  double elapsed_seconds = 0;          // since it started running (0 while queued)
+  double eta_seconds = -1;             // remaining, from the progress; < 0: unknown
+  std::vector<std::string> messages;   // what the job said: the latest few, oldest first
   std::string error;                   // FAILED / CANCELLED: why
 };
 ROBODIFF_FIELDS(JobInfo, job_id, kind, state, progress, elapsed_seconds, eta_seconds, messages, error);
@@ -248,7 +266,7 @@ struct CancelJobRequest {
 ROBODIFF_FIELDS(CancelJobRequest, job_id);
 
 struct CancelJobReply {
-  JobState state = JobState::Cancelled;
+  JobState state = JobState::Cancelled;  // after the cancel (a finished job keeps its state)
 };
 ROBODIFF_FIELDS(CancelJobReply, state);
 
@@ -257,6 +275,7 @@ struct JobResultRequest {
 };
 ROBODIFF_FIELDS(JobResultRequest, job_id);
 
+// FAILED_PRECONDITION while the job has not succeeded.
 struct JobResultReply {
   JobInfo info;
   std::string result_json;             // the job's result summary
@@ -269,9 +288,10 @@ ROBODIFF_FIELDS(JobResultReply, info, result_json, result_dir);
 enum class ServingState : std::uint32_t { Starting = 0, Serving = 1, Draining = 2 };
 const char* toString(ServingState state);  // "STARTING", "SERVING", "DRAINING"
 constexpr std::uint32_t valueCount(ServingState) { return 3; }
+constexpr const char* idlName(ServingState) { return "ServingState"; }
 
 struct HealthRequest {
-  bool verbose = false;
+  bool verbose = false;                // reserved for per-method detail (a body may not be empty)
 };
 ROBODIFF_FIELDS(HealthRequest, verbose);
 
@@ -298,12 +318,12 @@ ROBODIFF_FIELDS(TransportCounts, transport, requests, errors);
 
 struct HealthReply {
   ServingState state = ServingState::Starting;
-  std::string version;
+  std::string version;                 // robodiff's
   std::string server_instance_id;
   std::uint64_t uptime_ns = 0;
   std::uint32_t models_loaded = 0;
   std::uint32_t functions_loaded = 0;
-  std::uint32_t functions_compiled = 0;
+  std::uint32_t functions_compiled = 0;  // the rest are served by the interpreter
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
   std::uint64_t cache_hits = 0, cache_misses = 0;
   std::uint64_t cache_bytes = 0, cache_entries = 0;

@@ -1,6 +1,6 @@
 #pragma once
 // The service's status vocabulary (gRPC's codes) and the schema-version rule, in C++.
-// Mirrors schema/robodiff.idl: StatusCode has the same numeric values as the generated
+// Mirrors schema/robodiff.idl.in: StatusCode has the same numeric values as the generated
 // robodiff_wire_StatusCode (checked by static_asserts in status.cpp and by the tests).
 
 #include <cstdint>
@@ -46,7 +46,9 @@ struct Status {
   bool ok() const { return code == StatusCode::Ok; }
 };
 
-// The schema version this build speaks (robodiff_wire_SCHEMA_VERSION_MAJOR/MINOR).
+// The schema version this build speaks; robodiff.idl's SCHEMA_VERSION_MAJOR / MINOR are
+// written from these. Bump MINOR for additions a server can ignore or answer (a new method,
+// a new enum value at the end); bump MAJOR for anything else.
 inline constexpr std::uint16_t kSchemaVersionMajor = 1;
 inline constexpr std::uint16_t kSchemaVersionMinor = 1;  // 1: the job methods
 

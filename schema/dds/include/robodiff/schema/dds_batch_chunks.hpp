@@ -1,5 +1,5 @@
 #pragma once
-// EvaluateBatch replies split at knot boundaries (schema/README.md, "Large replies"): the
+// EvaluateBatch replies split at knot boundaries (docs/transports.md, "Large replies"): the
 // server plans the chunks so that each sample's doubles stay under a byte limit; the client
 // puts each chunk in place in the caller's output span and knows when it has them all.
 

@@ -1,6 +1,7 @@
 #pragma once
 // The DDS codec: the C++ messages of robodiff/schema/messages.hpp to and from the C types that
-// idlc generates from schema/robodiff.idl ("robodiff.h", robodiff_wire_*).
+// idlc generates from robodiff.idl ("robodiff.h", robodiff_wire_*), which the build writes
+// from messages.hpp's field lists: each field is paired with the C field of the same name.
 //
 // Ownership. toWire()/encode*() fill a C struct that must start zeroed, with memory from
 // dds_alloc / dds_string_dup (sequences get _release = true); WireSample frees all of it with
@@ -18,7 +19,7 @@
 #include <string>
 #include <variant>
 
-#include "robodiff.h"  // generated from schema/robodiff.idl
+#include "robodiff.h"  // idlc's C types of build/schema/robodiff.idl
 #include "robodiff/schema/messages.hpp"
 #include "robodiff/schema/status.hpp"
 
