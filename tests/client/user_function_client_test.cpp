@@ -23,8 +23,9 @@ TEST(ClientUserFunction, AHorizonInOneBatchFromASpecFile) {
     Client c(shared.server().options(mode));
     const client::Function f = c.functionFile(c.loadModel(arm7Text()), spec_path);
     // Local needs the compiled library in the cache: the server builds it first.
-    if (mode == Mode::Shm)
+    if (mode == Mode::Shm) {
       ASSERT_TRUE(waitFor([&] { return serverCompiled(c, f.id()); }, std::chrono::seconds(120)));
+    }
     ASSERT_EQ(f.mode(), mode);
     const std::size_t knots = 20, in_n = f.inputCount(), out_n = f.outputCount();
     std::vector<double> in;

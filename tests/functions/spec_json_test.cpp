@@ -34,7 +34,9 @@ TEST(SpecJson, EveryExampleSpecReadsBackToTheSameFunction) {
     expectReadsBack(spec, entry.path().filename().string());
     ++specs;
     user += spec.isUser() ? 1 : 0;
-    if (!spec.isUser()) EXPECT_EQ(specJson(spec), normalizedSpecJson(spec));
+    if (!spec.isUser()) {
+      EXPECT_EQ(specJson(spec), normalizedSpecJson(spec));
+    }
   }
   EXPECT_GE(specs, 20);
   EXPECT_GE(user, 6);

@@ -50,14 +50,6 @@ Robot robotFor(const std::string& spec) {
   return {};
 }
 
-// The variable inputs of `all` (every input in the spec's order).
-std::vector<Eigen::VectorXd> exampleVariableInputs(const FunctionSpec& spec, const std::vector<Eigen::VectorXd>& all) {
-  std::vector<Eigen::VectorXd> out;
-  for (std::size_t i = 0; i < spec.inputs.size(); ++i)
-    if (!spec.inputs[i].fixed) out.push_back(all[i]);
-  return out;
-}
-
 class UserExampleSpec : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(UserExampleSpec, EveryOutputMatchesTheReference) {

@@ -11,7 +11,7 @@ namespace {
 
 std::string problemOf(const std::string& text) {
   try {
-    (void)nlohmann::json::parse(text);
+    [[maybe_unused]] const nlohmann::json parsed = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     return language::jsonProblem(e.what());
   }
