@@ -119,6 +119,8 @@ TEST(BuildJob, RequestsRoundTripAsJson) {
   r.info.robot = "arm7";
   r.info.sizes = R"({"inputs":[7]})";
   r.info.build_seconds = 1.5;
+  r.urdf_limits.max_name_length = 1000;
+  r.urdf_limits.max_links = 7;
   const BuildRequest back = buildRequestFromJson(toJson(r));
   EXPECT_EQ(back.urdf, r.urdf);
   EXPECT_EQ(back.urdf_source, r.urdf_source);
@@ -137,6 +139,9 @@ TEST(BuildJob, RequestsRoundTripAsJson) {
   EXPECT_EQ(back.info.robot, "arm7");
   EXPECT_EQ(back.info.sizes, r.info.sizes);
   EXPECT_EQ(back.info.build_seconds, 1.5);
+  EXPECT_EQ(back.urdf_limits.max_name_length, 1000u);
+  EXPECT_EQ(back.urdf_limits.max_links, 7u);
+  EXPECT_EQ(back.urdf_limits.max_depth, UrdfLimits{}.max_depth);
 }
 
 // The message of the invalid_argument `f` throws.

@@ -141,6 +141,26 @@ const char* compileErrorKind(codegen::CompileError::Kind kind) {
   return "internal";
 }
 
+json urdfLimitsJson(const UrdfLimits& l) {
+  return {{"max_bytes", l.max_bytes},           {"max_depth", l.max_depth},
+          {"max_elements", l.max_elements},     {"max_links", l.max_links},
+          {"max_joints", l.max_joints},         {"max_name_length", l.max_name_length},
+          {"max_attribute_length", l.max_attribute_length}};
+}
+
+UrdfLimits urdfLimitsFromJson(const json& j, const std::string& where) {
+  const Fields f(j, where);
+  UrdfLimits l;
+  f.optional("max_bytes", l.max_bytes);
+  f.optional("max_depth", l.max_depth);
+  f.optional("max_elements", l.max_elements);
+  f.optional("max_links", l.max_links);
+  f.optional("max_joints", l.max_joints);
+  f.optional("max_name_length", l.max_name_length);
+  f.optional("max_attribute_length", l.max_attribute_length);
+  return l;
+}
+
 }  // namespace
 
 // --- codecs ---
@@ -148,6 +168,7 @@ const char* compileErrorKind(codegen::CompileError::Kind kind) {
 std::string toJson(const BuildRequest& r) {
   json j = {{"urdf", r.urdf},
             {"urdf_source", r.urdf_source},
+            {"urdf_limits", urdfLimitsJson(r.urdf_limits)},
             {"floating_base", r.floating_base},
             {"spec", r.spec},
             {"spec_source", r.spec_source},
@@ -171,6 +192,7 @@ BuildRequest buildRequestFromJson(const std::string& json_text) {
   r.spec = f.required<std::string>("spec");
   r.cache_dir = f.required<std::string>("cache_dir");
   f.optional("urdf_source", r.urdf_source);
+  if (f.has("urdf_limits")) r.urdf_limits = urdfLimitsFromJson(f.object("urdf_limits"), f.path("urdf_limits"));
   f.optional("floating_base", r.floating_base);
   f.optional("spec_source", r.spec_source);
   f.optional("function_name", r.function_name);
@@ -224,7 +246,8 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
   try {
     stage("model");
     const Model model = loadUrdfString(request.urdf, request.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed,
-                                       request.urdf_source.empty() ? "<string>" : request.urdf_source);
+                                       request.urdf_source.empty() ? "<string>" : request.urdf_source,
+                                       request.urdf_limits);
     const FunctionSpec spec = parseFunctionSpec(request.spec, request.spec_source.empty() ? "<spec>" : request.spec_source);
     const cache::PreparedBuild prepared =
         cache::prepareBuild(model, canonicalHash(model), spec, request.function_name, request.compiler);

@@ -145,7 +145,8 @@ void BuildRun::prepare(std::size_t i, const BuildTarget& t, Robot& robot) {
   } else if (!robot.model) {
     robot.urdf = t.urdf_text.empty() ? readText(t.urdf_path, "URDF") : t.urdf_text;
     robot.model = std::make_shared<const Model>(
-        loadUrdfString(robot.urdf, t.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, t.urdf_path));
+        loadUrdfString(robot.urdf, t.floating_base ? RootJoint::FreeFlyer : RootJoint::Fixed, t.urdf_path,
+                       options_.urdf_limits));
     robot.hash = canonicalHash(*robot.model);
   }
   const std::string spec_text = t.spec_text.empty() ? readText(t.spec_path, "spec") : t.spec_text;
@@ -158,6 +159,7 @@ void BuildRun::prepare(std::size_t i, const BuildTarget& t, Robot& robot) {
   BuildRequest& r = w.request;
   r.urdf = robot.urdf;
   r.urdf_source = t.urdf_path;
+  r.urdf_limits = options_.urdf_limits;
   r.floating_base = t.floating_base;
   r.spec = spec_text;
   r.spec_source = t.spec_path;

@@ -20,6 +20,7 @@ workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
   o.compiler = s.compiler;
   o.compiler_memory_limit_bytes = s.compiler_memory_limit_bytes;
   o.job_timeout = s.build_timeout;
+  o.urdf_limits = s.urdf_limits;
   return o;
 }
 

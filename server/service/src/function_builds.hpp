@@ -26,6 +26,7 @@
 
 #include "function_entry.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/model/urdf_limits.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/workers/cached_builder.hpp"
 #include "robodiff/workers/worker_pool.hpp"
@@ -40,6 +41,7 @@ struct BuildSettings {
   std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
   unsigned trace_threads = 2;
   unsigned compile_threads = 1;
+  UrdfLimits urdf_limits;  // LoadModel's (max_bytes capped by max_urdf_bytes), for the workers
 };
 
 struct BuildFigures {

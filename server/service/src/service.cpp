@@ -39,6 +39,8 @@ detail::BuildSettings buildSettings(const ServiceOptions& o) {
   s.compiler_memory_limit_bytes = o.compiler_memory_limit_bytes;
   s.compile_threads = std::max(1u, o.build_workers);  // one build per worker; the pool queues the rest
   s.trace_threads = 2;  // a long trace (a humanoid's Hessian) does not hold up every other function
+  s.urdf_limits = o.urdf_limits;
+  s.urdf_limits.max_bytes = std::min<std::uint64_t>(s.urdf_limits.max_bytes, o.max_urdf_bytes);
   return s;
 }
 

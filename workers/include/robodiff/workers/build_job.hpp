@@ -17,12 +17,14 @@
 #include "robodiff/functions/function_library.hpp"
 #include "robodiff/functions/function_spec.hpp"
 #include "robodiff/model/model.hpp"
+#include "robodiff/model/urdf_limits.hpp"
 
 namespace robodiff::workers {
 
 struct BuildRequest {
   std::string urdf;             // the URDF text
   std::string urdf_source;      // where it came from, for messages (a path)
+  UrdfLimits urdf_limits;       // the requester's: a URDF it accepted is never refused here
   bool floating_base = false;
   std::string spec;             // the spec's JSON text
   std::string spec_source;      // where it came from, for messages

@@ -20,6 +20,7 @@
 
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/model/model.hpp"
+#include "robodiff/model/urdf_limits.hpp"
 #include "robodiff/workers/worker_pool.hpp"
 
 namespace robodiff::workers {
@@ -67,6 +68,9 @@ struct BuildStatus {
 
 struct CachedBuilderOptions {
   std::string compiler;  // empty: $CC or cc
+  // The limits URDFs are read under, here and in the workers: a server passes the ones
+  // its LoadModel applies, so that a robot it accepted is never refused by its builds.
+  UrdfLimits urdf_limits;
   std::uint64_t compiler_memory_limit_bytes = std::uint64_t{4} << 30;
   std::chrono::milliseconds job_timeout = std::chrono::minutes(15);
   std::chrono::milliseconds poll_interval = std::chrono::milliseconds(100);  // while Waiting
