@@ -199,7 +199,7 @@ TEST_F(ShmTransport, WrongSchemaVersionIsRefused) {
   startServer();
   client::ShmConnectionOptions options;
   options.service = service_;
-  options.schema_version = {2, 0};
+  options.schema_version = {static_cast<std::uint16_t>(kSchemaVersionMajor + 1), 0};
   auto c = client::connectShm(options);
   rpc::HealthReply health;
   const Status s = c->health({}, health);
