@@ -18,21 +18,13 @@ class InProcessConnection final : public client::Connection {
  public:
   explicit InProcessConnection(Service& service) : service_(service) {}
   std::string_view transport() const override { return "inproc"; }
-  Status listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                       client::CallOptions) override {
+  // Only ListFunctions is served; every other method is refused.
+  Status call(const client::UnaryCall& unary, client::CallOptions) override {
+    const auto* list = std::get_if<client::ListFunctionsCall>(&unary);
+    if (list == nullptr) return no();
     ++calls;
-    return service_.listFunctions(context(), request, reply);
+    return service_.listFunctions(context(), *list->request, *list->reply);
   }
-  Status loadModel(const rpc::LoadModelRequest&, rpc::LoadModelReply&, client::CallOptions) override { return no(); }
-  Status getFunction(const rpc::GetFunctionRequest&, rpc::GetFunctionReply&, client::CallOptions) override {
-    return no();
-  }
-  Status health(const rpc::HealthRequest&, rpc::HealthReply&, client::CallOptions) override { return no(); }
-  Status release(const rpc::ReleaseRequest&, rpc::ReleaseReply&, client::CallOptions) override { return no(); }
-  Status submitJob(const rpc::SubmitJobRequest&, rpc::SubmitJobReply&, client::CallOptions) override { return no(); }
-  Status jobStatus(const rpc::JobStatusRequest&, rpc::JobStatusReply&, client::CallOptions) override { return no(); }
-  Status cancelJob(const rpc::CancelJobRequest&, rpc::CancelJobReply&, client::CallOptions) override { return no(); }
-  Status jobResult(const rpc::JobResultRequest&, rpc::JobResultReply&, client::CallOptions) override { return no(); }
   Status evaluate(std::string_view, std::span<const double>, std::span<double>, client::CallOptions) override {
     return no();
   }

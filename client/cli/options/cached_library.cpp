@@ -9,7 +9,6 @@
 #include "robodiff/functions/evaluation.hpp"
 #include "robodiff/model/canonical.hpp"
 #include "robodiff/runtime/cached_function.hpp"
-#include "robodiff/workers/build_job.hpp"
 #include "robodiff/workers/cached_builder.hpp"
 #include "robodiff/workers/worker_pool.hpp"
 

@@ -151,7 +151,8 @@ Status DdsConnection::confirmServer(Clock::time_point deadline) {
     CallOptions probe;
     probe.timeout = std::min<std::chrono::nanoseconds>(options_.probe_timeout, deadline - now);
     rpc::HealthReply ignored;
-    const Status s = healthCall({}, ignored, probe, false);
+    const rpc::HealthRequest request;
+    const Status s = unary(UnaryCall{HealthCall{&request, &ignored}}, probe, false);
     if (s.code == StatusCode::Unavailable) return s;
     if (s.code != StatusCode::DeadlineExceeded) confirmed_ = true;  // any answer will do
   }
@@ -160,8 +161,8 @@ Status DdsConnection::confirmServer(Clock::time_point deadline) {
 
 // ---- calls -----------------------------------------------------------------------------------
 
-Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options,
-                           bool confirm) {
+Status DdsConnection::exchange(rpc::Method method, const Encode& encode, Consume consume, CallOptions options,
+                               bool confirm) {
   const auto start = Clock::now();
   const auto timeout = std::chrono::duration_cast<Clock::duration>(
       options.timeout.count() > 0 ? options.timeout : options_.connection.default_timeout);
@@ -213,91 +214,41 @@ Status DdsConnection::call(rpc::Method method, const Encode& encode, Consume con
                                             std::to_string(domainId()) + ", topic " + endpoints_->writerTopic()};
 }
 
-Status DdsConnection::loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::LoadModel,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_LOAD_MODEL;
-        dds_codec::toWire(request, body._u.load_model);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.load_model, reply);
-        return Status{};
-      },
-      options);
+Status DdsConnection::call(const UnaryCall& unary_call, CallOptions options) {
+  return unary(unary_call, options, true);
 }
 
-Status DdsConnection::getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
-                                  CallOptions options) {
-  return call(
-      rpc::Method::GetFunction,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_GET_FUNCTION;
-        dds_codec::toWire(request, body._u.get_function);
-        return nullptr;
+// A message request goes through the codec's body variant (the union member is the
+// method's); the reply's discriminator must be the method's too.
+Status DdsConnection::unary(const UnaryCall& unary_call, CallOptions options, bool confirm) {
+  return std::visit(
+      [&](const auto& c) {
+        using Reply = std::remove_pointer_t<decltype(c.reply)>;
+        return exchange(
+            c.method,
+            [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
+              dds_codec::toWire(dds_codec::RequestBody{*c.request}, body);
+              return nullptr;
+            },
+            [&](const robodiff_wire_Reply& r, bool&) {
+              dds_codec::ReplyBody decoded;
+              if (Status s = dds_codec::fromWire(r.body, decoded); !s.ok())
+                return Status{StatusCode::Internal, "the server's reply is unreadable: " + s.message};
+              Reply* typed = std::get_if<Reply>(&decoded);
+              if (typed == nullptr)
+                return Status{StatusCode::Internal, "the server answered " + std::string(rpc::toString(c.method)) +
+                                                        " with the reply of another method"};
+              *c.reply = std::move(*typed);
+              return Status{};
+            },
+            options, confirm);
       },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.get_function, reply);
-        return Status{};
-      },
-      options);
-}
-
-Status DdsConnection::listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                                    CallOptions options) {
-  return call(
-      rpc::Method::ListFunctions,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_LIST_FUNCTIONS;
-        dds_codec::toWire(request, body._u.list_functions);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.list_functions, reply);
-        return Status{};
-      },
-      options);
-}
-
-Status DdsConnection::health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options) {
-  return healthCall(request, reply, options, true);
-}
-
-Status DdsConnection::healthCall(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options,
-                                 bool confirm) {
-  return call(
-      rpc::Method::Health,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_HEALTH;
-        dds_codec::toWire(request, body._u.health);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.health, reply);
-        return Status{};
-      },
-      options, confirm);
-}
-
-Status DdsConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::Release,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_RELEASE;
-        dds_codec::toWire(request, body._u.release);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.release, reply);
-        return Status{};
-      },
-      options);
+      unary_call);
 }
 
 Status DdsConnection::evaluate(std::string_view function_id, std::span<const double> inputs,
                                std::span<double> outputs, CallOptions options) {
-  return call(
+  return exchange(
       rpc::Method::Evaluate,
       [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
         body._d = robodiff_wire_METHOD_EVALUATE;
@@ -323,7 +274,7 @@ Status DdsConnection::evaluateBatch(std::string_view function_id, std::uint64_t 
     return {StatusCode::InvalidArgument, "EvaluateBatch of " + std::to_string(knots) +
                                              " knots: the wire format carries at most 4294967295; split the batch"};
   dds_codec::BatchAssembler assembler(knots, outputs);
-  return call(
+  return exchange(
       rpc::Method::EvaluateBatch,
       [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
         body._d = robodiff_wire_METHOD_EVALUATE_BATCH;
@@ -336,66 +287,6 @@ Status DdsConnection::evaluateBatch(std::string_view function_id, std::uint64_t 
         Status status = assembler.add(r.body._u.evaluate_batch);
         complete = assembler.complete();
         return status;
-      },
-      options);
-}
-
-Status DdsConnection::submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::SubmitJob,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_SUBMIT_JOB;
-        dds_codec::toWire(request, body._u.submit_job);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.submit_job, reply);
-        return Status{};
-      },
-      options);
-}
-
-Status DdsConnection::jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::JobStatus,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_JOB_STATUS;
-        dds_codec::toWire(request, body._u.job_status);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.job_status, reply);
-        return Status{};
-      },
-      options);
-}
-
-Status DdsConnection::cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::CancelJob,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_CANCEL_JOB;
-        dds_codec::toWire(request, body._u.cancel_job);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.cancel_job, reply);
-        return Status{};
-      },
-      options);
-}
-
-Status DdsConnection::jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options) {
-  return call(
-      rpc::Method::JobResult,
-      [&](robodiff_wire_RequestBody& body) -> dds_sequence_double* {
-        body._d = robodiff_wire_METHOD_JOB_RESULT;
-        dds_codec::toWire(request, body._u.job_result);
-        return nullptr;
-      },
-      [&](const robodiff_wire_Reply& r, bool&) {
-        dds_codec::fromWire(r.body._u.job_result, reply);
-        return Status{};
       },
       options);
 }

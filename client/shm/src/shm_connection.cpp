@@ -475,34 +475,8 @@ struct ShmConnection::Impl {
 ShmConnection::ShmConnection(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ShmConnection::~ShmConnection() = default;
 
-Status ShmConnection::loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::LoadModel, request, reply, options);
-}
-Status ShmConnection::getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
-                                  CallOptions options) {
-  return impl_->compact(rpc::Method::GetFunction, request, reply, options);
-}
-Status ShmConnection::listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                                    CallOptions options) {
-  return impl_->compact(rpc::Method::ListFunctions, request, reply, options);
-}
-Status ShmConnection::health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::Health, request, reply, options);
-}
-Status ShmConnection::release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::Release, request, reply, options);
-}
-Status ShmConnection::submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::SubmitJob, request, reply, options);
-}
-Status ShmConnection::jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::JobStatus, request, reply, options);
-}
-Status ShmConnection::cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::CancelJob, request, reply, options);
-}
-Status ShmConnection::jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options) {
-  return impl_->compact(rpc::Method::JobResult, request, reply, options);
+Status ShmConnection::call(const UnaryCall& unary, CallOptions options) {
+  return std::visit([&](const auto& c) { return impl_->compact(c.method, *c.request, *c.reply, options); }, unary);
 }
 Status ShmConnection::evaluate(std::string_view function_id, std::span<const double> inputs, std::span<double> outputs,
                                CallOptions options) {

@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "robodiff/schema/messages.hpp"
@@ -35,29 +36,66 @@ struct ConnectionOptions {
   rpc::SchemaVersion schema_version;
 };
 
+// One unary call: the method, the request, and where its reply goes. Every method but
+// Evaluate and EvaluateBatch is unary (those two carry spans of doubles, not messages).
+template <rpc::Method M, class Request, class Reply>
+struct MethodCall {
+  static constexpr rpc::Method method = M;
+  const Request* request;
+  Reply* reply;
+};
+using LoadModelCall = MethodCall<rpc::Method::LoadModel, rpc::LoadModelRequest, rpc::LoadModelReply>;
+using GetFunctionCall = MethodCall<rpc::Method::GetFunction, rpc::GetFunctionRequest, rpc::GetFunctionReply>;
+using ListFunctionsCall = MethodCall<rpc::Method::ListFunctions, rpc::ListFunctionsRequest, rpc::ListFunctionsReply>;
+using HealthCall = MethodCall<rpc::Method::Health, rpc::HealthRequest, rpc::HealthReply>;
+using ReleaseCall = MethodCall<rpc::Method::Release, rpc::ReleaseRequest, rpc::ReleaseReply>;
+using SubmitJobCall = MethodCall<rpc::Method::SubmitJob, rpc::SubmitJobRequest, rpc::SubmitJobReply>;
+using JobStatusCall = MethodCall<rpc::Method::JobStatus, rpc::JobStatusRequest, rpc::JobStatusReply>;
+using CancelJobCall = MethodCall<rpc::Method::CancelJob, rpc::CancelJobRequest, rpc::CancelJobReply>;
+using JobResultCall = MethodCall<rpc::Method::JobResult, rpc::JobResultRequest, rpc::JobResultReply>;
+using UnaryCall = std::variant<LoadModelCall, GetFunctionCall, ListFunctionsCall, HealthCall, ReleaseCall,
+                               SubmitJobCall, JobStatusCall, CancelJobCall, JobResultCall>;
+
 class Connection {
  public:
   virtual ~Connection() = default;
 
   virtual std::string_view transport() const = 0;  // "iceoryx", "dds"
 
-  virtual Status loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply,
-                           CallOptions options = {}) = 0;
-  virtual Status getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
-                             CallOptions options = {}) = 0;
-  virtual Status listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                               CallOptions options = {}) = 0;
-  virtual Status health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options = {}) = 0;
-  virtual Status release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options = {}) = 0;
+  // The unary methods (every method but the evaluations) all go through call(): one
+  // virtual entry point a transport implements once, whatever the message.
+  Status loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{LoadModelCall{&request, &reply}}, options);
+  }
+  Status getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{GetFunctionCall{&request, &reply}}, options);
+  }
+  Status listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
+                       CallOptions options = {}) {
+    return call(UnaryCall{ListFunctionsCall{&request, &reply}}, options);
+  }
+  Status health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{HealthCall{&request, &reply}}, options);
+  }
+  Status release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{ReleaseCall{&request, &reply}}, options);
+  }
   // Jobs: batch work run by the server in its worker processes.
-  virtual Status submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply,
-                           CallOptions options = {}) = 0;
-  virtual Status jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply,
-                           CallOptions options = {}) = 0;
-  virtual Status cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply,
-                           CallOptions options = {}) = 0;
-  virtual Status jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply,
-                           CallOptions options = {}) = 0;
+  Status submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{SubmitJobCall{&request, &reply}}, options);
+  }
+  Status jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{JobStatusCall{&request, &reply}}, options);
+  }
+  Status cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{CancelJobCall{&request, &reply}}, options);
+  }
+  Status jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options = {}) {
+    return call(UnaryCall{JobResultCall{&request, &reply}}, options);
+  }
+
+  // One unary call of any method; the reply is written only when the status is OK.
+  virtual Status call(const UnaryCall& unary, CallOptions options) = 0;
 
   // Inputs: the concatenated input blocks of one knot; outputs: room for the concatenated
   // output blocks. Sizes are not checked here (the server checks them and says what is

@@ -72,17 +72,7 @@ class DdsConnection final : public Connection {
   // Both endpoints matched with a server right now.
   bool connected() const;
 
-  Status loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options = {}) override;
-  Status getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
-                     CallOptions options = {}) override;
-  Status listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                       CallOptions options = {}) override;
-  Status health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options = {}) override;
-  Status release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options = {}) override;
-  Status submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options = {}) override;
-  Status jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options = {}) override;
-  Status cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options = {}) override;
-  Status jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options = {}) override;
+  Status call(const UnaryCall& unary, CallOptions options) override;
   Status evaluate(std::string_view function_id, std::span<const double> inputs, std::span<double> outputs,
                   CallOptions options = {}) override;
   Status evaluateBatch(std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
@@ -94,10 +84,11 @@ class DdsConnection final : public Connection {
   using Encode = std::function<dds_sequence_double*(robodiff_wire_RequestBody& body)>;
   using Consume = std::function<Status(const robodiff_wire_Reply& reply, bool& complete)>;
   // `confirm`: make sure the server answers at all first (confirmServer) after a (re)match.
-  Status call(rpc::Method method, const Encode& encode, Consume consume, CallOptions options, bool confirm = true);
+  Status exchange(rpc::Method method, const Encode& encode, Consume consume, CallOptions options,
+                  bool confirm = true);
+  Status unary(const UnaryCall& unary, CallOptions options, bool confirm);
   bool waitMatched(std::chrono::steady_clock::time_point until);
   Status confirmServer(std::chrono::steady_clock::time_point deadline);
-  Status healthCall(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options, bool confirm);
   void receiveLoop();
   void takeReplies();
   void updateMatched();

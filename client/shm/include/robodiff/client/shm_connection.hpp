@@ -48,17 +48,7 @@ class ShmConnection final : public Connection {
 
   std::string_view transport() const override { return "iceoryx"; }
 
-  Status loadModel(const rpc::LoadModelRequest& request, rpc::LoadModelReply& reply, CallOptions options = {}) override;
-  Status getFunction(const rpc::GetFunctionRequest& request, rpc::GetFunctionReply& reply,
-                     CallOptions options = {}) override;
-  Status listFunctions(const rpc::ListFunctionsRequest& request, rpc::ListFunctionsReply& reply,
-                       CallOptions options = {}) override;
-  Status health(const rpc::HealthRequest& request, rpc::HealthReply& reply, CallOptions options = {}) override;
-  Status release(const rpc::ReleaseRequest& request, rpc::ReleaseReply& reply, CallOptions options = {}) override;
-  Status submitJob(const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply, CallOptions options = {}) override;
-  Status jobStatus(const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply, CallOptions options = {}) override;
-  Status cancelJob(const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply, CallOptions options = {}) override;
-  Status jobResult(const rpc::JobResultRequest& request, rpc::JobResultReply& reply, CallOptions options = {}) override;
+  Status call(const UnaryCall& unary, CallOptions options) override;
   Status evaluate(std::string_view function_id, std::span<const double> inputs, std::span<double> outputs,
                   CallOptions options = {}) override;
   Status evaluateBatch(std::string_view function_id, std::uint64_t knots, std::span<const double> inputs,
