@@ -14,12 +14,12 @@
 #include "iceoryx_posh/popo/rpc_header.hpp"
 #include "iceoryx_posh/popo/untyped_server.hpp"
 #include "iceoryx_posh/popo/wait_set.hpp"
-#include "iceoryx_posh/runtime/service_discovery.hpp"
 #include "robodiff/schema/shm_codec.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
 #include "robodiff/server/error_budget.hpp"
 #include "robodiff/server/fair_scheduler.hpp"
 #include "robodiff/server/shm_caller.hpp"
+#include "shm_discovery.hpp"
 #include "shm_sessions.hpp"
 
 namespace robodiff::server {
@@ -496,30 +496,6 @@ struct ShmServer::Impl {
     }
   }
 };
-
-namespace {
-
-// Whether some process offers `description` as a server (request/response).
-bool serviceOffered(iox::runtime::ServiceDiscovery& discovery, const iox::capro::ServiceDescription& description) {
-  bool found = false;
-  discovery.findService(description.getServiceIDString(), description.getInstanceIDString(),
-                        description.getEventIDString(), [&](const iox::capro::ServiceDescription&) { found = true; },
-                        iox::popo::MessagingPattern::REQ_RES);
-  return found;
-}
-
-// True once nobody offers `description` (at once when nobody does), false after `wait`.
-bool waitForServiceFree(const iox::capro::ServiceDescription& description, std::chrono::milliseconds wait) {
-  iox::runtime::ServiceDiscovery discovery;
-  const auto until = std::chrono::steady_clock::now() + wait;
-  while (serviceOffered(discovery, description)) {
-    if (std::chrono::steady_clock::now() >= until) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return true;
-}
-
-}  // namespace
 
 ShmServer::ShmServer(ServiceApi& service, ShmServerOptions options, Logger& log)
     : impl_(std::make_unique<Impl>(service, std::move(options), log)) {}
