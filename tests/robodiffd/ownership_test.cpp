@@ -126,7 +126,7 @@ TEST_F(Ownership, OnlyTheOwnerOrAnOperatorActsOnAJobOrAFunction) {
   EXPECT_NE(r.out.find(function_id), std::string::npos) << r.out << r.err;
 
   // bob: refused, listings without them, and nothing names alice.
-  for (const std::string command : {"job status " + job_id, "job result " + job_id, "job cancel " + job_id}) {
+  for (const std::string& command : {"job status " + job_id, "job result " + job_id, "job cancel " + job_id}) {
     r = as("bob", command);
     EXPECT_EQ(r.exit_code, 1) << command << ": " << r.out << r.err;
     EXPECT_NE(r.err.find("PERMISSION_DENIED"), std::string::npos) << command << ": " << r.err;

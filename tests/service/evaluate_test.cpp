@@ -178,7 +178,7 @@ TEST(Evaluate, UnknownIdsAreNotFound) {
   rpc::GetFunctionReply reply;
   EXPECT_EQ(getFunction(*f.service, std::string(64, 'a'), kRneaValueSpec, false, reply).code, StatusCode::NotFound);
   rpc::ListFunctionsReply list;
-  EXPECT_EQ(f.service->listFunctions(context(), {std::string(64, 'a')}, list).code, StatusCode::NotFound);
+  EXPECT_EQ(f.service->listFunctions(context(), {std::string(64, 'a'), 0, ""}, list).code, StatusCode::NotFound);
   rpc::ReleaseReply released;
   EXPECT_EQ(f.service->release(context(), {"nope"}, released).code, StatusCode::NotFound);
 
