@@ -59,8 +59,15 @@ TEST_F(TrajectoryCliTest, CompiledCsvOutputEqualsTheLibrary) {
   const batch::CsvTable csv = batch::CsvTable::readFile(out);
   ASSERT_EQ(csv.rows(), 300u);
   EXPECT_EQ(csv.header()[0], "t");
-  EXPECT_EQ(csv.header()[1], "value_0");
-  EXPECT_EQ(csv.header()[8], "jacobian_0_0");
+  // Named by joint: the value's rows, the Jacobian's rows and its columns by input.
+  const std::string first = arm_.model.joints.front().name, second = arm_.model.joints[1].name;
+  const std::size_t nv = static_cast<std::size_t>(arm_.model.nv);
+  EXPECT_EQ(csv.header()[1], "value_" + first);
+  EXPECT_EQ(csv.header()[2], "value_" + second);
+  EXPECT_EQ(csv.header()[1 + nv], "jacobian_" + first + "_q_" + first);
+  EXPECT_EQ(csv.header()[2 + nv], "jacobian_" + first + "_q_" + second);
+  EXPECT_EQ(csv.header()[1 + 2 * nv], "jacobian_" + first + "_v_" + first);
+  EXPECT_EQ(csv.header()[1 + nv + 3 * nv], "jacobian_" + second + "_q_" + first);
   for (std::size_t k = 0; k < csv.rows(); ++k) {
     ASSERT_EQ(csv.number(k, 0), want.times[k]);
     for (std::size_t i = 0; i < want.output_count; ++i)
@@ -119,7 +126,7 @@ TEST_F(TrajectoryCliTest, AMissingColumnAndABadExtensionAreErrors) {
 }
 
 // A user spec: input columns by input name (q_<joint>, u_<joint>, target_<i>), output
-// columns by output name (q_next_<r>, dv_next_<r>_<c>, cost_0, grad_<r>).
+// columns by output name (q_next_<r>, dv_next_<r>_u_<joint>, cost_0, grad_q_<joint>).
 TEST_F(TrajectoryCliTest, UserSpecColumnsByInputAndOutputName) {
   const char* text = R"js({"name": "step",
     "inputs": {"q": "configuration", "v": "nv", "u": "nv", "target": 3, "dt": {"fixed": [0.01]}},
@@ -151,7 +158,10 @@ TEST_F(TrajectoryCliTest, UserSpecColumnsByInputAndOutputName) {
   const batch::CsvTable csv = batch::CsvTable::readFile(out);
   const std::vector<std::string> want_header = {"t", "q_next_0"};
   EXPECT_EQ(std::vector<std::string>(csv.header().begin(), csv.header().begin() + 2), want_header);
-  for (const char* column : {"q_next_6", "dv_next_6_6", "cost_0", "grad_0", "grad_9"})
+  // A Jacobian's columns and a gradient's entries by the input they differentiate against.
+  const std::string last = arm_.model.joints[6].name;
+  for (const std::string& column : {std::string("q_next_6"), "dv_next_6_u_" + last, std::string("cost_0"),
+                                    "grad_q_" + arm_.model.joints[0].name, std::string("grad_target_2")})
     EXPECT_TRUE(csv.column(column)) << column;
   const batch::TrajectoryOutput want =
       batch::evaluateTrajectory(f, batch::readTrajectoryFile(data, arm_.model, f.inputs(), batch::configurationInputs(user)))

@@ -78,6 +78,7 @@ TrajectoryReport runTrajectoryJob(const BatchFunction& function, const Model& mo
   TrajectoryOutput& output = evaluation.output;
   output.function = spec.functionName();
   output.model = model.name;
+  output.labels = outputAxisLabels(model, spec, function.inputs(), output.blocks);
   output.spec_json = normalizedSpecJson(spec);
   OutputWriteOptions write;
   write.format = report.format;

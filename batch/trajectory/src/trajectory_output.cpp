@@ -54,7 +54,7 @@ void checkCancelled(const OutputWriteOptions& options, const std::filesystem::pa
 void writeCsv(AtomicFile& file, const std::filesystem::path& path, const TrajectoryOutput& output,
               const OutputWriteOptions& options) {
   std::string header = output.times.empty() ? "" : "t";
-  for (const std::string& name : outputColumnNames(output.blocks)) header += (header.empty() ? "" : ",") + name;
+  for (const std::string& name : outputColumnNames(output.blocks, output.labels)) header += (header.empty() ? "" : ",") + name;
   file.write(header + "\n");
   const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   std::vector<std::string> texts(threads);
@@ -168,20 +168,27 @@ OutputFormat outputFormatFor(const std::filesystem::path& path) {
                         "binary format)");
 }
 
-std::vector<std::string> outputColumnNames(const std::vector<BlockLayout>& blocks) {
+std::vector<std::string> outputColumnNames(const std::vector<BlockLayout>& blocks,
+                                           const std::vector<AxisLabels>& labels) {
   std::vector<std::string> names;
-  for (const BlockLayout& block : blocks) {
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const BlockLayout& block = blocks[b];
+    const AxisLabels none;
+    const AxisLabels& axes = b < labels.size() ? labels[b] : none;
+    auto row = [&](std::uint32_t r) { return r < axes.rows.size() ? axes.rows[r] : std::to_string(r); };
+    auto col = [&](std::uint32_t c) { return c < axes.cols.size() ? axes.cols[c] : std::to_string(c); };
     const std::size_t first = names.size();
     names.resize(first + block.size);
+    const std::string prefix = block.name + "_";
     if (block.sparse) {
       for (std::uint32_t r = 0; r < block.rows; ++r)
         for (std::uint32_t i = block.row_ptr[r]; i < block.row_ptr[r + 1]; ++i)
-          names[first + i] = block.name + "_" + std::to_string(r) + "_" + std::to_string(block.col_idx[i]);
+          names[first + i] = prefix + row(r) + "_" + col(block.col_idx[i]);
     } else if (block.cols == 1) {
-      for (std::uint32_t r = 0; r < block.size; ++r) names[first + r] = block.name + "_" + std::to_string(r);
+      for (std::uint32_t r = 0; r < block.size; ++r) names[first + r] = prefix + row(r);
     } else {
       for (std::uint32_t i = 0; i < block.size; ++i)
-        names[first + i] = block.name + "_" + std::to_string(i / block.cols) + "_" + std::to_string(i % block.cols);
+        names[first + i] = prefix + row(i / block.cols) + "_" + col(i % block.cols);
     }
   }
   return names;

@@ -66,13 +66,18 @@ void checkQuaternions(const Model& model, const std::vector<BlockLayout>& inputs
   }
 }
 
-std::string suffixedName(const std::string& block, const Joint& joint, int k, bool configuration) {
+// Coordinate k of a joint: "elbow", "root_qw", "ball_2".
+std::string coordinateName(const Joint& joint, int k, bool configuration) {
   static const char* kConfiguration[] = {"x", "y", "z", "qx", "qy", "qz", "qw"};
   static const char* kTangent[] = {"vx", "vy", "vz", "wx", "wy", "wz"};
   const int count = configuration ? joint.nq : joint.nv;
-  if (count == 1) return block + "_" + joint.name;
-  if (joint.type == JointType::FreeFlyer) return block + "_" + joint.name + "_" + (configuration ? kConfiguration[k] : kTangent[k]);
-  return block + "_" + joint.name + "_" + std::to_string(k);
+  if (count == 1) return joint.name;
+  if (joint.type == JointType::FreeFlyer) return joint.name + "_" + (configuration ? kConfiguration[k] : kTangent[k]);
+  return joint.name + "_" + std::to_string(k);
+}
+
+std::string suffixedName(const std::string& block, const Joint& joint, int k, bool configuration) {
+  return block + "_" + coordinateName(joint, k, configuration);
 }
 
 // Where each input block's entries come from in the CSV header, or an error naming what is missing.
@@ -159,6 +164,13 @@ std::vector<std::string> jointColumns(const Model& model, const BlockLayout& blo
   for (const Joint& joint : model.joints)
     for (int k = 0; k < (configuration ? joint.nq : joint.nv); ++k)
       names.push_back(suffixedName(block.name, joint, k, configuration));
+  return names;
+}
+
+std::vector<std::string> dofNames(const Model& model) {
+  std::vector<std::string> names;
+  for (const Joint& joint : model.joints)
+    for (int k = 0; k < joint.nv; ++k) names.push_back(coordinateName(joint, k, false));
   return names;
 }
 

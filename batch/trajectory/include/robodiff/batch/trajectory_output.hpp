@@ -4,11 +4,16 @@
 // CSV (.csv): a header row, then one row per knot, numbers in the shortest form that reads
 // back to the same double (std::to_chars). Columns: "t" when the trajectory had times,
 // then one column per output double in the function's layout order:
-//   <block>_<r>        a block with one column (value of rnea: value_0 .. value_{nv-1})
-//   <block>_<r>_<c>    a dense matrix block, row-major (jacobian_3_14: row 3, column 14)
+//   <block>_<r>        a block with one column (value of rnea: value_<joint>)
+//   <block>_<r>_<c>    a dense matrix block, row-major (jacobian_elbow_q_shoulder)
 //   <block>_<r>_<c>    a CSR block: one column per stored nonzero, in CSR order
-// Rows and columns are 0-based; a Jacobian's columns follow the spec's "wrt" order (a
-// floating base's q block has nv tangent columns).
+// A row or column is named by its joint coordinate where the block's rows are the
+// model's nv velocity coordinates (a free flyer's root_joint_vx .. _wz, as the input CSV
+// names them), and a Jacobian's or Hessian's column by the input it differentiates
+// against, in the spec's "wrt" order: <input>_<joint> for an input per joint (a floating
+// base's q block has nv tangent columns), <input>_<i> for another (a user function's
+// gradient's entries too: grad_q_elbow); anything else by its
+// 0-based number (fk's value_0 .. value_6).
 //
 // Binary (.rdb or .bin), for large outputs, read without parsing text:
 //   offset 0    8 bytes  magic "RDTRAJ01"
@@ -47,6 +52,11 @@ OutputFormat parseOutputFormat(const std::string& text);  // csv | binary | rdb 
 // By extension: .csv -> Csv, .rdb or .bin -> Binary; throws TrajectoryError naming the path otherwise.
 OutputFormat outputFormatFor(const std::filesystem::path& path);
 
+// Names of a block's rows and of its columns, as the CSV header uses them.
+struct AxisLabels {
+  std::vector<std::string> rows, cols;
+};
+
 struct TrajectoryOutput {
   std::vector<BlockLayout> blocks;  // the function's outputs(), offsets within one knot's outputs
   std::size_t output_count = 0;     // doubles per knot over all blocks
@@ -55,12 +65,18 @@ struct TrajectoryOutput {
   std::vector<double> values;       // knots x output_count, knot-major
   std::string function, model;      // named in the binary header
   std::string spec_json;            // the normalised spec, in the binary header when set
+  // Per block, names for its rows and columns (outputAxisLabels); a missing or empty
+  // list: by index.
+  std::vector<AxisLabels> labels;
 
   const double* knot(std::uint64_t k) const { return values.data() + k * output_count; }
 };
 
-// One name per output double, as the CSV header has them (without "t").
-std::vector<std::string> outputColumnNames(const std::vector<BlockLayout>& blocks);
+// One name per output double, as the CSV header has them (without "t"): "<block>_<row>"
+// for a vector, "<block>_<row>_<column>" for a matrix entry, each row and column by its
+// label in `labels` (value_elbow, jacobian_elbow_v_shoulder) or else by its number.
+std::vector<std::string> outputColumnNames(const std::vector<BlockLayout>& blocks,
+                                           const std::vector<AxisLabels>& labels = {});
 
 struct OutputWriteOptions {
   std::optional<OutputFormat> format;  // unset: by the path's extension

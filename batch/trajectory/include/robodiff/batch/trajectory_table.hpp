@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "robodiff/batch/batch_function.hpp"
+#include "robodiff/batch/trajectory_output.hpp"
 #include "robodiff/model/model.hpp"
 
 namespace robodiff::batch {
@@ -59,6 +60,15 @@ std::vector<std::string> configurationInputs(const FunctionSpec& spec);
 std::vector<std::string> jointColumns(const Model& model, const BlockLayout& block,
                                       const std::vector<std::string>& configurations = {"q"});
 std::vector<std::string> indexColumns(const BlockLayout& block);
+// The model's velocity coordinates, one name each in v's order: the joint's name for a
+// one-DoF joint, "<joint>_vx" .. "<joint>_wz" for a free flyer, "<joint>_<k>" otherwise.
+std::vector<std::string> dofNames(const Model& model);
+
+// The row and column names of each output block of `spec` (trajectory_output.hpp says
+// which rows and columns are named); a block whose sizes do not fit gets none.
+std::vector<AxisLabels> outputAxisLabels(const Model& model, const FunctionSpec& spec,
+                                         const std::vector<BlockLayout>& inputs,
+                                         const std::vector<BlockLayout>& outputs);
 
 // Throws TrajectoryError ("source:line: ..." for CSV, "source: path: ..." for JSON).
 // `configurations` names the configuration blocks (configurationInputs).
