@@ -79,11 +79,11 @@ class IdlWriter {
   void add() {
     if (!written_.insert(rpc::Fields<T>::kName).second) return;  // also ends a cycle
     T sample{};
-    rpc::Fields<T>::visit(sample, sample, [this](const char*, auto& field, auto&) {
+    rpc::Fields<T>::visit(sample, sample, [&](const char*, auto& field, auto&) {
       addContained<std::remove_cvref_t<decltype(field)>>();
     });
     text_ += std::string("  @final struct ") + rpc::Fields<T>::kName + " {\n";
-    rpc::Fields<T>::visit(sample, sample, [this](const char* name, auto& field, auto&) {
+    rpc::Fields<T>::visit(sample, sample, [&](const char* name, auto& field, auto&) {
       writeField<std::remove_cvref_t<decltype(field)>>(rpc::Fields<T>::kName, name);
     });
     text_ += "  };\n\n";
