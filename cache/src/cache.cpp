@@ -474,6 +474,15 @@ std::optional<Entry> Cache::entry(const std::string& key) {
   return state_->db->entry(key);
 }
 
+bool Cache::intact(const std::string& key) {
+  std::lock_guard lock(state_->mutex);
+  const std::optional<Entry> e = state_->db->entry(key);
+  if (!e || e->state != "ready") return false;
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(state_->objectDir(key) / "library.so", ec);
+  return !ec && size == e->library_bytes;
+}
+
 CacheStats Cache::stats() {
   std::lock_guard lock(state_->mutex);
   CacheStats st;

@@ -62,6 +62,24 @@ void expectQuarantinedAndRebuildable(Cache& cache, const TempDir& tmp, const std
   EXPECT_TRUE(cache.find(keyOf(name)));
 }
 
+// intact(): the cheap look a holder of a library takes (index row and file size, no hash).
+TEST(CacheIntact, ReadyWithTheIndexedSizeOnly) {
+  TempDir tmp;
+  Cache cache = Cache::open(tmp / "cache");
+  EXPECT_FALSE(cache.intact(keyOf("absent")));
+  const Artifact a = healingBuild(cache, tmp, "whole");
+  EXPECT_TRUE(cache.intact(a.key()));
+  ::chmod(a.library().c_str(), 0700);
+  fs::resize_file(a.library(), 100);
+  EXPECT_FALSE(cache.intact(a.key()));
+  fs::remove(a.library());
+  EXPECT_FALSE(cache.intact(a.key()));
+  ClaimResult building = cache.claim(keyOf("building"), infoFor("building"));
+  ASSERT_EQ(building.state, ClaimResult::State::Claimed);
+  EXPECT_FALSE(cache.intact(keyOf("building")));
+  cache.abandon(*building.claim);
+}
+
 TEST(CacheSelfHealing, AMissingLibraryIsQuarantinedAndRebuilt) {
   TempDir tmp;
   Cache cache = Cache::open(tmp / "cache");

@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "robodiff/cache/cache.hpp"
 #include "service_fixtures.hpp"
 
 namespace robodiff::server::testing {
@@ -87,6 +88,42 @@ TEST(CacheHealing, AMissingTruncatedOrReplacedLibraryIsRebuiltOnTheNextGetFuncti
   EXPECT_FALSE(fs::is_empty(ws.tmp / "cache" / "quarantine"));
   const std::string log = ws.logText();
   EXPECT_NE(log.find("function_compiled"), std::string::npos);
+}
+
+// While the service holds the compiled function, its cache entry is lost (the file
+// deleted, then quarantined by another process's find()): the held library keeps
+// serving, and the next GetFunction of it builds the entry again in the background.
+TEST(CacheHealing, AnEntryLostWhileTheServiceHoldsItIsRebuiltOnTheNextGetFunction) {
+  ServiceWorkspace ws;
+  auto service = ws.start(ws.options(true));
+  const rpc::LoadModelReply model = loadModel(*service, arm7Urdf());
+  const rpc::GetFunctionReply f = readyFunction(*service, model.model_id, kRneaJacobianSpec);
+  ASSERT_TRUE(waitFor([&] { return summaryOf(*service, f.function_id).compiled; }, std::chrono::seconds(120)));
+  const std::size_t knots = 20;
+  const std::vector<double> inputs = someInputs(knots * 21, 7);
+  std::vector<double> before(knots * rpc::outputCount(f)), after(before.size());
+  ASSERT_TRUE(service->evaluateBatch(context(), f.function_id, knots, inputs, before).ok());
+
+  const fs::path library = onlyLibrary(ws.tmp / "cache");
+  const std::string key = library.parent_path().filename().string();
+  fs::remove(library);
+  {
+    cache::Cache other = cache::Cache::open(ws.tmp / "cache");
+    EXPECT_FALSE(other.find(key));  // quarantined and unindexed
+    EXPECT_FALSE(other.entry(key));
+  }
+  readyFunction(*service, model.model_id, kRneaJacobianSpec);  // the same function again
+  cache::Cache cache = cache::Cache::open(ws.tmp / "cache");
+  EXPECT_TRUE(waitFor([&] { return ws.logText().find("cache_entry_rebuilt") != std::string::npos; },
+                      std::chrono::seconds(120)))
+      << ws.logText();
+  EXPECT_NE(ws.logText().find("cache_entry_lost"), std::string::npos);
+  EXPECT_TRUE(cache.intact(key));
+  EXPECT_TRUE(cache.find(key));
+  // Served throughout by the library it held, with the same numbers.
+  ASSERT_TRUE(service->evaluateBatch(context(), f.function_id, knots, inputs, after).ok());
+  EXPECT_EQ(after, before);
+  EXPECT_TRUE(summaryOf(*service, f.function_id).compiled);
 }
 
 }  // namespace

@@ -226,6 +226,7 @@ bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& functio
     std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
     cache_hits_.fetch_add(1, std::memory_order_relaxed);
     f.setCompileSeconds(secondsSince(started), true);
+    f.setCacheKey(key);
     f.setCompileStage(CompileStage::Compiled);
     f.ready(std::move(compiled));
     log_.info("function_loaded",
@@ -243,15 +244,7 @@ void FunctionBuilds::compile(const std::shared_ptr<FunctionEntry>& function) {
     builds_queued_.fetch_sub(1, std::memory_order_relaxed);
     return;
   }
-  workers::BuildTarget target;
-  target.urdf_path = f.model().source_name;  // names the URDF in the worker's messages
-  target.floating_base = f.model().floating_base;
-  target.spec_path = "spec of function " + f.id();
-  target.urdf_text = f.model().urdf;
-  target.model = f.model().model;  // parsed and hashed once, at LoadModel
-  target.model_hash = f.model().id;
-  target.spec_text = f.specText();
-
+  const workers::BuildTarget target = buildTarget(f);
   std::atomic<bool> running{false};
   auto listener = [&](std::size_t, const workers::BuildStatus& s) {
     if (s.state == workers::BuildState::Building && !running.exchange(true)) {
@@ -280,6 +273,63 @@ void FunctionBuilds::compile(const std::shared_ptr<FunctionEntry>& function) {
   swapIn(function, status);
 }
 
+workers::BuildTarget FunctionBuilds::buildTarget(const FunctionEntry& f) {
+  workers::BuildTarget target;
+  target.urdf_path = f.model().source_name;  // names the URDF in the worker's messages
+  target.floating_base = f.model().floating_base;
+  target.spec_path = "spec of function " + f.id();
+  target.urdf_text = f.model().urdf;
+  target.model = f.model().model;  // parsed and hashed once, at LoadModel
+  target.model_hash = f.model().id;
+  target.spec_text = f.specText();
+  return target;
+}
+
+void FunctionBuilds::refillIfMissing(const std::shared_ptr<FunctionEntry>& function) {
+  FunctionEntry& f = *function;
+  if (!settings_.compile || stopping_ || f.compileStage() != CompileStage::Compiled) return;
+  const std::string key = f.cacheKey();
+  if (key.empty()) return;
+  try {
+    if (cache_.intact(key)) return;
+    const std::optional<cache::Entry> entry = cache_.entry(key);
+    if (entry && entry->state == "building") return;  // someone rebuilds it already
+  } catch (const std::exception& e) {
+    log_.warn("cache_lookup_failed", {{"function_id", f.id()}, {"key", key}, {"message", e.what()}});
+    return;
+  }
+  if (!f.beginRefill()) return;
+  log_.warn("cache_entry_lost", {{"function_id", f.id()}, {"key", key}, {"action", "rebuilding it"}});
+  if (!compile_queue_.post([this, function, key] { refill(function, key); })) f.endRefill();
+}
+
+void FunctionBuilds::refill(const std::shared_ptr<FunctionEntry>& function, const std::string& key) {
+  FunctionEntry& f = *function;
+  workers::BuildStatus status;
+  if (!stopping_ && !f.unloaded()) {
+    try {
+      // find() verifies the entry: files missing or changed are quarantined and unindexed,
+      // so the build below makes it again instead of taking the row for a hit.
+      if (cache_.find(key)) {
+        status.key = key;
+        status.state = workers::BuildState::Cached;
+      } else {
+        status = builder_.buildAll({buildTarget(f)}).at(0);
+      }
+    } catch (const std::exception& e) {
+      status.state = workers::BuildState::Failed;
+      status.message = e.what();
+    }
+    const bool built = status.state == workers::BuildState::Done || status.state == workers::BuildState::Cached;
+    if (built && status.key != key) status.message = "the rebuilt library has another key: " + status.key;
+    if (built && status.key == key)
+      log_.info("cache_entry_rebuilt", {{"function_id", f.id()}, {"key", key}, {"seconds", status.seconds}});
+    else
+      log_.warn("cache_refill_failed", {{"function_id", f.id()}, {"key", key}, {"message", status.message}});
+  }
+  f.endRefill();
+}
+
 void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status) {
   FunctionEntry& f = *function;
   try {
@@ -294,6 +344,7 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
     }
     // The times first: whoever sees the compiled phase must see them too.
     f.setCompileSeconds(status.seconds, status.state == workers::BuildState::Cached);
+    f.setCacheKey(status.key);
     f.swap(std::move(compiled));
     f.setCompileStage(CompileStage::Compiled);
   } catch (const std::exception& e) {

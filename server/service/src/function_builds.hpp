@@ -80,6 +80,11 @@ class FunctionBuilds {
 
   // Starts making `function` (BUILDING) servable.
   void start(std::shared_ptr<FunctionEntry> function);
+  // A compiled function whose cache entry is gone (quarantined by a process that found
+  // its files missing or changed, or lost with the index): its library in memory keeps
+  // serving, and the entry is built again in the background, so that local clients and
+  // the next start find it. Cheap when the entry is there (one index lookup).
+  void refillIfMissing(const std::shared_ptr<FunctionEntry>& function);
   void stop();
 
   BuildFigures figures() const;
@@ -95,6 +100,8 @@ class FunctionBuilds {
   void trace(const std::shared_ptr<FunctionEntry>& function);
   bool loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
   void compile(const std::shared_ptr<FunctionEntry>& function);
+  void refill(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
+  static workers::BuildTarget buildTarget(const FunctionEntry& function);
   void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status);
   void buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message);
   void cancelRunningBuilds();

@@ -104,4 +104,14 @@ void FunctionEntry::setCompileSeconds(double seconds, bool from_cache) {
   build_times_.from_cache = from_cache;
 }
 
+void FunctionEntry::setCacheKey(std::string key) {
+  std::lock_guard lock(mutex_);
+  cache_key_ = std::move(key);
+}
+
+std::string FunctionEntry::cacheKey() const {
+  std::lock_guard lock(mutex_);
+  return cache_key_;
+}
+
 }  // namespace robodiff::server::detail

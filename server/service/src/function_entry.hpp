@@ -97,6 +97,14 @@ class FunctionEntry {
   void setTraceSeconds(double seconds);
   void setCompileSeconds(double seconds, bool from_cache);
 
+  // The cache key of the library serving it (set before it serves); empty before.
+  void setCacheKey(std::string key);
+  std::string cacheKey() const;
+  // One rebuild of a lost cache entry at a time (FunctionBuilds::refillIfMissing): true
+  // for the caller that may start one, until endRefill().
+  bool beginRefill() { return !refilling_.exchange(true, std::memory_order_acq_rel); }
+  void endRefill() { refilling_.store(false, std::memory_order_release); }
+
   // Released (no references left): builds not started yet are skipped.
   void markUnloaded() { unloaded_.store(true, std::memory_order_release); }
   bool unloaded() const { return unloaded_.load(std::memory_order_acquire); }
@@ -115,6 +123,7 @@ class FunctionEntry {
   std::atomic<std::shared_ptr<const Evaluator>> evaluator_;
   std::atomic<std::uint64_t> evaluations_{0};
   std::atomic<bool> unloaded_{false};
+  std::atomic<bool> refilling_{false};
   std::atomic<CompileStage> compile_stage_{CompileStage::None};
   LatencyHistogram call_latency_;
   std::atomic<std::uint64_t> batch_calls_{0}, batch_knots_{0}, batch_ns_{0};
@@ -124,6 +133,7 @@ class FunctionEntry {
   Status failure_;
   std::string message_;
   BuildTimes build_times_;
+  std::string cache_key_;
 };
 
 }  // namespace robodiff::server::detail

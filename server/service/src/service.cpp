@@ -292,7 +292,10 @@ Status Service::getFunction(const CallContext& ctx, const rpc::GetFunctionReques
                                       {"state", rpc::toString(f.state())},
                                       {"client_id", ctx.client_id},
                                       {"caller", ctx.caller.name}});
-    if (added.created) s.builds.start(added.function);
+    if (added.created)
+      s.builds.start(added.function);
+    else
+      s.builds.refillIfMissing(added.function);
 
     if (request.wait && !f.waitSettled(ctx.deadline)) {
       fillFunctionReply(f, reply);

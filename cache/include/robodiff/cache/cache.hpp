@@ -204,6 +204,10 @@ class Cache {
 
   std::vector<Entry> list();  // every row, most recently used first
   std::optional<Entry> entry(const std::string& key);
+  // Whether key is ready and its library file is in place with the indexed size: a cheap
+  // look (no hash, no hit counted) for a holder of the library to see that the entry was
+  // lost; find() is what verifies it.
+  bool intact(const std::string& key);
   CacheStats stats();
   // Checks every ready artifact's files and library hash.
   VerifyReport verify();
