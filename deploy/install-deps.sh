@@ -17,6 +17,7 @@ PACKAGES=(
   libtomlplusplus-dev  # toml++: robodiffd.conf is TOML (server/robodiffd/src/config_file.cpp)
   clang tcc
   chromium chromium-driver  # the dashboard's test runs the page in headless Chromium
+  python3-venv python3-dev  # the Python module: build/venv (python/setup-venv.sh) and Python's headers
 )
 
 missing=()
