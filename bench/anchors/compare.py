@@ -1,0 +1,197 @@
+"""bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio and
+CppADCodeGen) and `robodiff bench --json`, two rounds, keeps the minimum per cell, checks
+robodiff's values and Jacobians (`robodiff compute --backend generated`) against
+Pinocchio's analytic ones at the anchors' check states, and prints one table per robot.
+
+Run through bench/anchors/run (it builds anchors_bench and passes the paths)."""
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import report  # noqa: E402
+import robots  # noqa: E402
+
+LIMIT = 1e-9  # relative error (scaled by max(1, |reference|)) a side may have
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--robots", default=robots.DEFAULT_ROBOTS, help="comma-separated: " + ", ".join(robots.CATALOGUE))
+    p.add_argument("--json", help="write the merged results as JSON to FILE")
+    p.add_argument("--plot", help="write µs per call against DoF as a PNG to FILE")
+    p.add_argument("--quick", action="store_true", help="shorter timing on every side (noisier)")
+    p.add_argument("--rounds", type=int, default=2, help="alternating rounds; the minimum per cell is kept")
+    p.add_argument("--cap", type=float, default=120, help="seconds a CppADCodeGen library may take to build")
+    p.add_argument("--bench", required=True, help="anchors_bench executable")
+    p.add_argument("--robodiff", required=True, help="robodiff CLI executable")
+    p.add_argument("--work", required=True, help="working directory (libraries, outputs)")
+    return p.parse_args()
+
+
+def run(cmd, **kw):
+    """Runs cmd; its stderr goes through (progress), a failure stops with its message."""
+    proc = subprocess.run(cmd, stdout=subprocess.PIPE, text=True, **kw)
+    if proc.returncode != 0:
+        raise SystemExit(f"anchors: failed ({proc.returncode}): {' '.join(cmd)}")
+    return proc.stdout
+
+
+def anchors_round(args, robot, work, reuse):
+    out = os.path.join(work, f"anchors_{'reuse' if reuse else 'cold'}.json")
+    cmd = [args.bench, "--urdf", robot.urdf, "--out", out, "--workdir", os.path.join(work, "cppadcodegen"),
+           "--cap", str(args.cap)]
+    cmd += ["--floating-base"] if robot.floating_base else []
+    cmd += ["--quick"] if args.quick else []
+    cmd += ["--reuse"] if reuse else []
+    run(cmd)
+    with open(out) as f:
+        return json.load(f)
+
+
+def robodiff_round(args, robot):
+    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json"]
+    cmd += ["--floating-base"] if robot.floating_base else []
+    cmd += ["--quick"] if args.quick else []
+    return json.loads(run(cmd))
+
+
+def keep_min(slot, us):
+    if us is not None and (slot.get("us") is None or us < slot["us"]):
+        slot["us"] = us
+
+
+def merge_anchors(result, data):
+    for side in ("pinocchio", "cppadcodegen"):
+        for row in data["sides"][side]:
+            slot = result["rows"].setdefault(row["name"], {}).setdefault(side, {})
+            slot["status"] = row["status"]
+            if row["note"]:
+                slot["note"] = row["note"]
+            if row["status"] == "wrong":
+                slot["us"] = None
+                slot["wrong"] = True
+            elif not slot.get("wrong"):
+                keep_min(slot, row["us_per_call"])
+            if side == "cppadcodegen" and row["status"] in ("ok", "over_cap"):
+                b = result["builds"].setdefault(row["name"], {}).setdefault("cppadcodegen", {})
+                b.setdefault("seconds", row["build_seconds"])
+                b.setdefault("mib", row["compiler_mib"])
+                if row["note"]:
+                    b["note"] = row["note"]
+
+
+def merge_robodiff(result, data):
+    rows = {r["name"]: r for r in data["rows"]}
+    for name, _ in report.ROWS:
+        if name in rows and "us_per_call" in rows[name]:
+            keep_min(result["rows"].setdefault(name, {}).setdefault("robodiff", {}), rows[name]["us_per_call"])
+        total, mem = rows.get(f"build.{name}.total"), rows.get(f"build.{name}.compiler_peak_memory")
+        if total is not None:
+            b = result["builds"].setdefault(name, {}).setdefault("robodiff", {})
+            b["seconds"] = min(b.get("seconds", float("inf")), total["seconds"])
+            b["mib"] = min(b.get("mib", float("inf")), mem["bytes"] / 2**20)
+
+
+def rel_err(actual, expected):
+    import numpy as np
+    a, e = np.asarray(actual, dtype=float), np.asarray(expected, dtype=float)
+    if a.shape != e.shape:
+        return float("inf")
+    if e.size == 0:
+        return 0.0
+    err = float(np.max(np.abs(a - e)) / max(1.0, float(np.max(np.abs(e)))))
+    return err if err == err else float("inf")
+
+
+# robodiff compute calls checked: (row, --function, with --derivatives)
+COMPUTE_CHECKS = [("rnea_value", "rnea", False), ("rnea_jacobian_dense", "rnea", True),
+                  ("aba_value", "aba", False), ("aba_jacobian", "aba", True)]
+
+
+def check_robodiff(args, robot, anchors, work):
+    """robodiff's generated libraries at the anchors' check states against Pinocchio's
+    outputs; returns {row: max relative error}."""
+    reference = {r["name"]: r["outputs"] for r in anchors["sides"]["pinocchio"]}
+    cache = os.path.join(work, "robodiff_cache")
+    os.makedirs(cache, mode=0o700, exist_ok=True)
+    errors = {}
+    for row, function, derivatives in COMPUTE_CHECKS:
+        err = 0.0
+        for k, state in enumerate(anchors["states"]):
+            path = os.path.join(work, f"state{k}.json")
+            with open(path, "w") as f:
+                json.dump(state, f)
+            cmd = [args.robodiff, "compute", "--urdf", robot.urdf, "--function", function, "--backend", "generated",
+                   "--cache", cache, "--state", path]
+            cmd += ["--floating-base"] if robot.floating_base else []
+            cmd += ["--derivatives"] if derivatives else []
+            out = json.loads(run(cmd, stderr=subprocess.DEVNULL))
+            ref = reference[row][k]
+            err = max(err, rel_err(out["value"], ref["value"]))
+            if derivatives:
+                err = max(err, rel_err(out["jacobian"], ref["jacobian"]))
+        errors[row] = err
+    return errors
+
+
+def measure(args, robot):
+    work = os.path.join(args.work, robot.key)
+    os.makedirs(work, exist_ok=True)
+    result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
+              "rows": {}, "builds": {}, "checks": {}}
+    first = None
+    for r in range(args.rounds):
+        print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio + CppADCodeGen ...", file=sys.stderr)
+        data = anchors_round(args, robot, work, reuse=r > 0)
+        first = first or data
+        merge_anchors(result, data)
+        print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: robodiff bench ...", file=sys.stderr)
+        merge_robodiff(result, robodiff_round(args, robot))
+    result["nq"], result["nv"] = first["nq"], first["nv"]
+    for row in first["sides"]["cppadcodegen"]:
+        if row["status"] == "ok":
+            result["checks"][f"CppADCodeGen {row['name']}"] = f"{row['max_err']:.1e}"
+    print(f"anchors: {robot.title}: checking robodiff's values and Jacobians ...", file=sys.stderr)
+    for row, err in check_robodiff(args, robot, first, work).items():
+        result["checks"][f"robodiff {row}"] = f"{err:.1e}"
+        if not err <= LIMIT:
+            slot = result["rows"][row].setdefault("robodiff", {})
+            slot["us"], slot["note"] = None, f"WRONG: max err {err:.3g}"
+    return result
+
+
+def machine():
+    try:
+        out = subprocess.run(["lscpu"], stdout=subprocess.PIPE, text=True).stdout
+        model = next(line.split(":", 1)[1].strip() for line in out.splitlines() if line.startswith("Model name"))
+    except (OSError, StopIteration):
+        model = platform.processor() or "unknown CPU"
+    return f"{model}, {os.cpu_count()} hardware threads"
+
+
+def main():
+    args = parse_args()
+    t0 = time.monotonic()
+    selected = robots.resolve([k for k in args.robots.split(",") if k], args.work)
+    results = [measure(args, robot) for robot in selected]
+    minutes = (time.monotonic() - t0) / 60
+    header = (f"bench/anchors, {time.strftime('%Y-%m-%d', time.gmtime())}, {machine()}; Pinocchio 3.7.0 (pin wheel), "
+              f"CppADCodeGen 2.4.3 (gcc -O2 -march=native), robodiff bench; µs per call, minimum of {args.rounds} "
+              f"alternating rounds{' (--quick)' if args.quick else ''}; ratio = robodiff / the best anchor; "
+              f"run took {minutes:.1f} min")
+    report.print_tables(results, header)
+    if args.json:
+        report.write_json(args.json, results, header)
+    if args.plot:
+        report.plot(args.plot, results)
+        print(f"\nplot: {args.plot}")
+
+
+if __name__ == "__main__":
+    main()

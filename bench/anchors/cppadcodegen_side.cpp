@@ -1,0 +1,288 @@
+// The CppADCodeGen side, used the way Pinocchio's own codegen uses it: Pinocchio's
+// templated algorithm taped with CppAD::AD<CppAD::cg::CG<double>>, the tape optimized,
+// C generated (ModelCSourceGen: forward zero, and the Jacobian), compiled by the system
+// gcc -O2 -march=native into a dynamic library (DynamicModelLibraryProcessor +
+// GccCompiler), loaded and called through its GenericModel.
+//
+// Every library is built in a child process of its own: its wall time is the cold build
+// (tape + generate + compile), getrusage(RUSAGE_CHILDREN) there gives the compiler's
+// peak memory, and a build over the cap is killed (with its compilers) and reported.
+//
+// Jacobians are w.r.t. [q in the tangent space, v, a or tau], as Pinocchio's analytic
+// derivatives: the tape's inputs are [q, dq, v, a] with q' = integrate(q, dq), and the
+// library's sparse Jacobian is asked for the (dense) block of the columns dq, v, a only,
+// evaluated at dq = 0.
+#include <pinocchio/codegen/cppadcg.hpp>  // first: Pinocchio's support of the CG scalar
+#include <cppad/cg.hpp>
+
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <thread>
+
+#include "anchors.hpp"
+
+namespace anchors {
+namespace {
+
+namespace fs = std::filesystem;
+using robodiff::cli::bench::doNotOptimize;
+using robodiff::cli::bench::secondsPerCall;
+
+using CGD = CppAD::cg::CG<double>;
+using ADS = CppAD::AD<CGD>;
+using ADVec = Eigen::Matrix<ADS, Eigen::Dynamic, 1>;
+using ADMat = Eigen::Matrix<ADS, Eigen::Dynamic, Eigen::Dynamic>;
+
+// What a row's library takes and gives.
+struct CodegenShape {
+  bool jacobian = false;   // value + Jacobian over [dq, v, a|tau] (inputs [q, dq, v, a|tau])
+  bool q_only = false;     // CRBA and the frame Jacobian: inputs [q]
+  int n_in = 0, n_out = 0;
+};
+
+CodegenShape shapeOf(const std::string& row, const pinocchio::Model& m) {
+  CodegenShape s;
+  s.jacobian = row == "rnea_jacobian_dense" || row == "aba_jacobian";
+  s.q_only = row == "crba_value" || row == "frame_jacobian_value";
+  s.n_in = s.q_only ? m.nq : s.jacobian ? m.nq + 3 * m.nv : m.nq + 2 * m.nv;
+  s.n_out = row == "crba_value" ? m.nv * m.nv : row == "frame_jacobian_value" ? 6 * m.nv : m.nv;
+  return s;
+}
+
+// The library's input vector at state s (dq = 0 for the Jacobian rows).
+std::vector<double> inputAt(const std::string& row, const pinocchio::Model& m, const State& s) {
+  const CodegenShape shape = shapeOf(row, m);
+  std::vector<double> x(s.q.data(), s.q.data() + m.nq);
+  if (shape.q_only) return x;
+  if (shape.jacobian) x.insert(x.end(), m.nv, 0.0);
+  const bool aba = row.rfind("aba", 0) == 0;
+  const Eigen::VectorXd& last = aba ? s.tau : s.a;
+  x.insert(x.end(), s.v.data(), s.v.data() + m.nv);
+  x.insert(x.end(), last.data(), last.data() + m.nv);
+  return x;
+}
+
+// Records `row` through Pinocchio's templates on the CG scalar; returns the optimized tape.
+std::unique_ptr<CppAD::ADFun<CGD>> tape(const std::string& row, const pinocchio::Model& model, const State& s) {
+  using ADModel = pinocchio::ModelTpl<ADS>;
+  const ADModel ad_model = model.cast<ADS>();
+  pinocchio::DataTpl<ADS> ad_data(ad_model);
+  const CodegenShape shape = shapeOf(row, model);
+  const std::vector<double> x0 = inputAt(row, model, s);
+  std::vector<ADS> x(x0.begin(), x0.end());
+  CppAD::Independent(x);
+  const int nq = model.nq, nv = model.nv;
+  auto segment = [&](int begin, int n) {
+    ADVec v(n);
+    for (int i = 0; i < n; ++i) v[i] = x[begin + i];
+    return v;
+  };
+  ADVec q = segment(0, nq);
+  int at = nq;
+  if (shape.jacobian) q = pinocchio::integrate(ad_model, q, segment(nq, nv)), at += nv;
+  std::vector<ADS> y;
+  auto put = [&](const auto& mat) {
+    for (Eigen::Index c = 0; c < mat.cols(); ++c)
+      for (Eigen::Index r = 0; r < mat.rows(); ++r) y.push_back(mat(r, c));
+  };
+  if (row == "rnea_value" || row == "rnea_jacobian_dense") {
+    put(pinocchio::rnea(ad_model, ad_data, q, segment(at, nv), segment(at + nv, nv)));
+  } else if (row == "aba_value" || row == "aba_jacobian") {
+    put(pinocchio::aba(ad_model, ad_data, q, segment(at, nv), segment(at + nv, nv)));
+  } else if (row == "crba_value") {
+    pinocchio::crba(ad_model, ad_data, q);
+    const ADMat M = ad_data.M.selfadjointView<Eigen::Upper>();
+    put(M);
+  } else if (row == "frame_jacobian_value") {
+    ADMat J = ADMat::Zero(6, nv);
+    pinocchio::computeFrameJacobian(ad_model, ad_data, q, lastFrame(model), pinocchio::LOCAL_WORLD_ALIGNED, J);
+    put(J);
+  }
+  auto fun = std::make_unique<CppAD::ADFun<CGD>>(x, y);
+  fun->optimize("no_compare_op");
+  return fun;
+}
+
+// Generates and compiles the library of `row` in the current directory (the child).
+void generateAndCompile(const std::string& row, const pinocchio::Model& model, const State& s) {
+  std::unique_ptr<CppAD::ADFun<CGD>> fun = tape(row, model, s);
+  const CodegenShape shape = shapeOf(row, model);
+  CppAD::cg::ModelCSourceGen<double> source(*fun, row);
+  source.setCreateForwardZero(true);
+  if (shape.jacobian) {
+    std::vector<size_t> rows, cols;  // row-major, the columns [dq, v, a|tau]
+    for (int r = 0; r < model.nv; ++r)
+      for (int c = 0; c < 3 * model.nv; ++c) rows.push_back(r), cols.push_back(model.nq + c);
+    source.setCreateSparseJacobian(true);
+    source.setCustomSparseJacobianElements(rows, cols);
+  }
+  CppAD::cg::ModelLibraryCSourceGen<double> library(source);
+  CppAD::cg::DynamicModelLibraryProcessor<double> processor(library, "anchor_" + row);
+  CppAD::cg::GccCompiler<double> gcc("/usr/bin/gcc");
+  gcc.setCompileFlags({"-O2", "-march=native"});
+  gcc.setCompileLibFlags({"-O2", "-march=native", "-shared", "-rdynamic"});
+  processor.createDynamicLibrary(gcc, false);
+}
+
+fs::path libraryPath(const fs::path& dir, const std::string& row) { return dir / ("anchor_" + row + ".so"); }
+
+// Builds `row`'s library in dir in a child process, within the cap. Fills build_s,
+// compiler_mib and status; records them in dir/build.txt for a later --reuse.
+void buildInChild(const std::string& row, const pinocchio::Model& model, const State& s, const fs::path& dir,
+                  double cap, RowResult& r) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    setpgid(0, 0);
+    int code = 1;
+    try {
+      fs::current_path(dir);
+      generateAndCompile(row, model, s);
+      rusage ru{};
+      getrusage(RUSAGE_CHILDREN, &ru);
+      std::ofstream(dir / "compiler_kib") << ru.ru_maxrss << "\n";
+      code = 0;
+    } catch (const std::exception& e) {
+      std::ofstream(dir / "error") << e.what() << "\n";
+    }
+    _exit(code);
+  }
+  setpgid(pid, pid);
+  int status = 0;
+  bool over = false;
+  for (;;) {
+    if (waitpid(pid, &status, WNOHANG) == pid) break;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > cap) {
+      kill(-pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      over = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::ofstream record(dir / "build.txt");
+  if (over) {
+    r.status = "over_cap", r.note = "build > " + std::to_string(static_cast<int>(cap)) + " s";
+    record << "over_cap " << cap << "\n";
+    return;
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !fs::exists(libraryPath(dir, row))) {
+    std::string why = "build failed";
+    if (std::ifstream err(dir / "error"); err) std::getline(err, why);
+    r.status = "failed", r.note = why;
+    record << "failed\n";
+    return;
+  }
+  double kib = 0;
+  std::ifstream(dir / "compiler_kib") >> kib;
+  r.build_s = seconds, r.compiler_mib = kib / 1024.0;
+  record << "ok " << seconds << " " << *r.compiler_mib << "\n";
+}
+
+// A build of an earlier round, from dir/build.txt; false when there is none.
+bool reuseBuild(const std::string& row, const fs::path& dir, RowResult& r) {
+  std::ifstream record(dir / "build.txt");
+  std::string status;
+  if (!(record >> status)) return false;
+  if (status == "over_cap") {
+    double cap = 0;
+    record >> cap;
+    r.status = "over_cap", r.note = "build > " + std::to_string(static_cast<int>(cap)) + " s";
+    return true;
+  }
+  if (status != "ok" || !fs::exists(libraryPath(dir, row))) return false;
+  double s = 0, mib = 0;
+  record >> s >> mib;
+  r.build_s = s, r.compiler_mib = mib;
+  return true;
+}
+
+// A loaded library and its model, with preallocated input and output buffers.
+struct LoadedModel {
+  std::unique_ptr<CppAD::cg::LinuxDynamicLib<double>> lib;
+  std::unique_ptr<CppAD::cg::GenericModel<double>> model;
+  std::vector<double> x, y, jac;
+  const size_t *rows = nullptr, *cols = nullptr;
+
+  void call(bool jacobian) {
+    model->ForwardZero(CppAD::cg::ArrayView<const double>(x), CppAD::cg::ArrayView<double>(y));
+    if (jacobian)
+      model->SparseJacobian(CppAD::cg::ArrayView<const double>(x), CppAD::cg::ArrayView<double>(jac), &rows, &cols);
+    doNotOptimize(y[0]);
+    doNotOptimize(jac);
+  }
+};
+
+Output outputOf(const std::string& row, const pinocchio::Model& m, LoadedModel& lm) {
+  const CodegenShape shape = shapeOf(row, m);
+  lm.call(shape.jacobian);
+  Output o;
+  const Eigen::Map<const Eigen::VectorXd> y(lm.y.data(), static_cast<Eigen::Index>(lm.y.size()));
+  if (row == "crba_value") o.jacobian = Eigen::Map<const Eigen::MatrixXd>(lm.y.data(), m.nv, m.nv);
+  else if (row == "frame_jacobian_value") o.jacobian = Eigen::Map<const Eigen::MatrixXd>(lm.y.data(), 6, m.nv);
+  else o.value = y;
+  if (shape.jacobian) {
+    o.jacobian = Eigen::MatrixXd::Zero(m.nv, 3 * m.nv);
+    for (size_t k = 0; k < lm.jac.size(); ++k)
+      o.jacobian(static_cast<Eigen::Index>(lm.rows[k]), static_cast<Eigen::Index>(lm.cols[k]) - m.nq) = lm.jac[k];
+  }
+  return o;
+}
+
+}  // namespace
+
+std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
+                                       const std::vector<State>& checks, const Timing& plan,
+                                       const CodegenOptions& options) {
+  std::vector<RowResult> rows;
+  for (const std::string& name : kRows) {
+    RowResult r;
+    r.name = name;
+    if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), name) == options.only.end()) {
+      r.status = "skipped";
+      rows.push_back(std::move(r));
+      continue;
+    }
+    const fs::path dir = fs::path(options.workdir) / name;
+    if (!(options.reuse && reuseBuild(name, dir, r))) {
+      std::fprintf(stderr, "anchors_bench: CppADCodeGen building %s ...\n", name.c_str());
+      buildInChild(name, model, timed, dir, options.cap_seconds, r);
+    }
+    if (r.status != "ok") {
+      rows.push_back(std::move(r));
+      continue;
+    }
+    LoadedModel lm;
+    lm.lib = std::make_unique<CppAD::cg::LinuxDynamicLib<double>>(libraryPath(dir, name).string());
+    lm.model = lm.lib->model(name);
+    const CodegenShape shape = shapeOf(name, model);
+    lm.y.resize(static_cast<size_t>(shape.n_out));
+    lm.jac.resize(shape.jacobian ? static_cast<size_t>(3 * model.nv * model.nv) : 0);
+    for (const State& s : checks) {
+      lm.x = inputAt(name, model, s);
+      r.outputs.push_back(outputOf(name, model, lm));
+    }
+    lm.x = inputAt(name, model, timed);
+    r.us = 1e6 * secondsPerCall([&] { lm.call(shape.jacobian); }, plan);
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+}  // namespace anchors

@@ -1,0 +1,178 @@
+// anchors_bench: times Pinocchio's analytic algorithms and CppADCodeGen's generated code
+// for one robot, the same way `robodiff bench` times its own (bench_timing.hpp), checks
+// CppADCodeGen's values and Jacobians against Pinocchio's at a few states (1e-9
+// relative), and writes everything as JSON (compare.py reads it).
+//
+//   anchors_bench --urdf FILE [--floating-base] --out FILE --workdir DIR
+//                 [--quick] [--cap SECONDS] [--reuse] [--seed N] [--checks N]
+//                 [--codegen-rows a,b,...] [--no-codegen]
+#include <pinocchio/parsers/urdf.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "anchors.hpp"
+
+namespace {
+
+constexpr double kLimit = 1e-9;  // relative error a side may have against Pinocchio's analytic outputs
+
+struct Args {
+  std::string urdf, out, workdir;
+  bool floating_base = false, quick = false, reuse = false, codegen = true;
+  double cap = 120;
+  unsigned seed = 1;
+  int checks = 3;
+  std::vector<std::string> codegen_rows;
+};
+
+std::vector<std::string> splitCommas(const std::string& s) {
+  std::vector<std::string> parts;
+  std::stringstream in(s);
+  for (std::string p; std::getline(in, p, ',');)
+    if (!p.empty()) parts.push_back(p);
+  return parts;
+}
+
+Args parseArgs(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("option " + k + " needs a value");
+      return argv[++i];
+    };
+    if (k == "--urdf") a.urdf = next();
+    else if (k == "--out") a.out = next();
+    else if (k == "--workdir") a.workdir = next();
+    else if (k == "--floating-base") a.floating_base = true;
+    else if (k == "--quick") a.quick = true;
+    else if (k == "--reuse") a.reuse = true;
+    else if (k == "--no-codegen") a.codegen = false;
+    else if (k == "--cap") a.cap = std::stod(next());
+    else if (k == "--seed") a.seed = static_cast<unsigned>(std::stoul(next()));
+    else if (k == "--checks") a.checks = std::stoi(next());
+    else if (k == "--codegen-rows") a.codegen_rows = splitCommas(next());
+    else throw std::runtime_error("unknown option " + k);
+  }
+  if (a.urdf.empty() || a.out.empty() || a.workdir.empty())
+    throw std::runtime_error("--urdf, --out and --workdir are required");
+  for (const std::string& r : a.codegen_rows)
+    if (std::find(anchors::kRows.begin(), anchors::kRows.end(), r) == anchors::kRows.end())
+      throw std::runtime_error("--codegen-rows: no row " + r);
+  return a;
+}
+
+// ---- JSON output (numbers with 17 significant digits) ----
+
+std::string number(double x) {
+  if (!std::isfinite(x)) return "null";
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
+std::string quoted(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c == '\n' ? ' ' : c;
+  }
+  return o + "\"";
+}
+std::string vectorJson(const Eigen::VectorXd& v) {
+  std::string o = "[";
+  for (Eigen::Index i = 0; i < v.size(); ++i) o += (i ? "," : "") + number(v[i]);
+  return o + "]";
+}
+std::string matrixJson(const Eigen::MatrixXd& m) {
+  std::string o = "[";
+  for (Eigen::Index r = 0; r < m.rows(); ++r) o += (r ? "," : "") + vectorJson(m.row(r).transpose());
+  return o + "]";
+}
+std::string optionalJson(const std::optional<double>& x) { return x ? number(*x) : "null"; }
+
+std::string rowJson(const anchors::RowResult& r, bool with_outputs) {
+  std::string o = "{\"name\":" + quoted(r.name) + ",\"us_per_call\":" + optionalJson(r.us) +
+                  ",\"build_seconds\":" + optionalJson(r.build_s) + ",\"compiler_mib\":" + optionalJson(r.compiler_mib) +
+                  ",\"status\":" + quoted(r.status) + ",\"note\":" + quoted(r.note) + ",\"max_err\":" + number(r.max_err);
+  if (with_outputs) {
+    o += ",\"outputs\":[";
+    for (size_t k = 0; k < r.outputs.size(); ++k)
+      o += std::string(k ? "," : "") + "{\"value\":" + vectorJson(r.outputs[k].value) +
+           ",\"jacobian\":" + matrixJson(r.outputs[k].jacobian) + "}";
+    o += "]";
+  }
+  return o + "}";
+}
+
+std::string sideJson(const std::vector<anchors::RowResult>& rows, bool with_outputs) {
+  std::string o = "[";
+  for (size_t k = 0; k < rows.size(); ++k) o += (k ? ",\n    " : "") + rowJson(rows[k], with_outputs);
+  return o + "]";
+}
+
+// Checks `side` against Pinocchio's outputs; a row that disagrees loses its figure.
+void checkAgainst(const std::vector<anchors::RowResult>& reference, std::vector<anchors::RowResult>& side) {
+  for (size_t i = 0; i < side.size(); ++i) {
+    anchors::RowResult& r = side[i];
+    if (r.status != "ok") continue;
+    double err = 0;
+    for (size_t k = 0; k < r.outputs.size(); ++k) {
+      err = std::max(err, anchors::relativeError(r.outputs[k].value, reference[i].outputs[k].value));
+      err = std::max(err, anchors::relativeError(r.outputs[k].jacobian, reference[i].outputs[k].jacobian));
+    }
+    r.max_err = err;
+    if (!(err <= kLimit)) {
+      char b[80];
+      std::snprintf(b, sizeof b, "WRONG: max err %.3g", err);
+      r.status = "wrong", r.note = b, r.us.reset();
+    }
+  }
+}
+
+int run(const Args& a) {
+  pinocchio::Model model;
+  if (a.floating_base) pinocchio::urdf::buildModel(a.urdf, pinocchio::JointModelFreeFlyer(), model);
+  else pinocchio::urdf::buildModel(a.urdf, model);
+  const anchors::Timing plan = a.quick ? anchors::Timing::quick() : anchors::Timing::full();
+  const std::vector<anchors::State> states = anchors::drawStates(model, a.seed, 1 + a.checks);
+  const anchors::State& timed = states.front();
+  const std::vector<anchors::State> checks(states.begin() + 1, states.end());
+
+  std::fprintf(stderr, "anchors_bench: %s (nq %d, nv %d): Pinocchio ...\n", model.name.c_str(), model.nq, model.nv);
+  const std::vector<anchors::RowResult> pin = anchors::runPinocchio(model, timed, checks, plan);
+  std::vector<anchors::RowResult> cg;
+  if (a.codegen) {
+    anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
+    cg = anchors::runCppADCodeGen(model, timed, checks, plan, options);
+    checkAgainst(pin, cg);
+  }
+
+  std::ofstream out(a.out);
+  out << "{\"robot\":" << quoted(model.name) << ",\"urdf\":" << quoted(a.urdf)
+      << ",\"floating_base\":" << (a.floating_base ? "true" : "false") << ",\"nq\":" << model.nq
+      << ",\"nv\":" << model.nv << ",\"frame\":" << quoted(model.frames[anchors::lastFrame(model)].name)
+      << ",\"timing\":" << quoted(std::string("median of ") + std::to_string(plan.batches) + " batches of ~" +
+                                  number(plan.batch_seconds * 1e3) + " ms, thread CPU time (robodiff bench's)")
+      << ",\n \"states\":[";
+  for (size_t k = 0; k < checks.size(); ++k)
+    out << (k ? "," : "") << "{\"q\":" << vectorJson(checks[k].q) << ",\"v\":" << vectorJson(checks[k].v)
+        << ",\"a\":" << vectorJson(checks[k].a) << ",\"tau\":" << vectorJson(checks[k].tau) << "}";
+  out << "],\n \"sides\":{\"pinocchio\":" << sideJson(pin, true) << ",\n  \"cppadcodegen\":" << sideJson(cg, false)
+      << "}}\n";
+  if (!out) throw std::runtime_error("cannot write " + a.out);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(parseArgs(argc, argv));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "anchors_bench: error: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,104 @@
+"""Tables (markdown), JSON and the plot of bench/anchors, from the merged results."""
+import json
+
+ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_bench
+    ("rnea_value", "RNEA value"),
+    ("rnea_jacobian_dense", "RNEA value + J"),
+    ("aba_value", "ABA value"),
+    ("aba_jacobian", "ABA value + J"),
+    ("crba_value", "CRBA value"),
+    ("frame_jacobian_value", "frame Jacobian value"),
+]
+BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"]
+SIDES = ["pinocchio", "cppadcodegen", "robodiff"]
+
+
+def cell(entry):
+    """A side's cell of the speed table: µs, or why there is none."""
+    if entry is None:
+        return "–"
+    if entry.get("us") is not None:
+        return fmt(entry["us"])
+    return entry.get("note") or entry.get("status", "–")
+
+
+def fmt(x, digits=3):
+    if x is None:
+        return "–"
+    if x >= 100:
+        return f"{x:,.0f}"
+    return f"{x:.{digits}g}"
+
+
+def ratio_to_best(row):
+    rd = (row.get("robodiff") or {}).get("us")
+    anchors = [(row.get(s) or {}).get("us") for s in ("pinocchio", "cppadcodegen")]
+    anchors = [a for a in anchors if a is not None]
+    if rd is None or not anchors:
+        return None
+    return rd / min(anchors)
+
+
+def robot_table(result):
+    lines = [f"### {result['title']} (nq {result['nq']}, nv {result['nv']})", "",
+             "| function | Pinocchio µs | CppADCodeGen µs | robodiff µs | robodiff / best |",
+             "|---|---|---|---|---|"]
+    for name, label in ROWS:
+        row = result["rows"].get(name, {})
+        r = ratio_to_best(row)
+        lines.append(f"| {label} | {cell(row.get('pinocchio'))} | {cell(row.get('cppadcodegen'))} | "
+                     f"{cell(row.get('robodiff'))} | {'–' if r is None else f'{r:.2f}'} |")
+    lines += ["", "| build (cold) | CppADCodeGen s | CppADCodeGen MiB | robodiff s | robodiff MiB | "
+              "robodiff / CppADCodeGen (s, MiB) |", "|---|---|---|---|---|---|"]
+    for name, label in ROWS:
+        if name not in BUILD_ROWS:
+            continue
+        b = result["builds"].get(name, {})
+        cg, rd = b.get("cppadcodegen", {}), b.get("robodiff", {})
+        cg_s = fmt(cg.get("seconds")) if cg.get("seconds") is not None else (cg.get("note") or "–")
+        rs = ("–" if cg.get("seconds") is None or rd.get("seconds") is None
+              else f"{rd['seconds'] / cg['seconds']:.2f}")
+        rm = ("–" if cg.get("mib") is None or rd.get("mib") is None else f"{rd['mib'] / cg['mib']:.2f}")
+        lines.append(f"| {label} | {cg_s} | {fmt(cg.get('mib'))} | {fmt(rd.get('seconds'))} | "
+                     f"{fmt(rd.get('mib'))} | {rs}, {rm} |")
+    checks = result.get("checks", {})
+    if checks:
+        lines += ["", "Checks against Pinocchio's analytic outputs (max relative error, limit 1e-9): " +
+                  "; ".join(f"{k} {v}" for k, v in checks.items())]
+    return "\n".join(lines)
+
+
+def print_tables(results, header):
+    print(header)
+    for result in results:
+        print()
+        print(robot_table(result))
+
+
+def write_json(path, results, header):
+    with open(path, "w") as f:
+        json.dump({"header": header, "robots": results}, f, indent=1)
+
+
+def plot(path, results):
+    """µs per call against DoF (nv): one line per side and row kind."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    kinds = [r for r in ROWS if r[0] in BUILD_ROWS]
+    fig, axes = plt.subplots(1, len(kinds), figsize=(4.2 * len(kinds), 4), sharey=False)
+    styles = {"pinocchio": "o-", "cppadcodegen": "s--", "robodiff": "^-"}
+    for ax, (name, label) in zip(axes, kinds):
+        for side in SIDES:
+            pts = sorted((res["nv"], res["rows"][name][side]["us"]) for res in results
+                         if (res["rows"].get(name, {}).get(side) or {}).get("us") is not None)
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], styles[side], label=side)
+        ax.set_title(label)
+        ax.set_xlabel("degrees of freedom (nv)")
+        ax.set_yscale("log")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("µs per call")
+    axes[0].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
