@@ -94,7 +94,7 @@ class Connection {
     return call(UnaryCall{JobResultCall{&request, &reply}}, options);
   }
 
-  // One unary call of any method; the reply is written only when the status is OK.
+  // One unary call of any method; the reply is meaningful only when the status is OK.
   virtual Status call(const UnaryCall& unary, CallOptions options) = 0;
 
   // Inputs: the concatenated input blocks of one knot; outputs: room for the concatenated
