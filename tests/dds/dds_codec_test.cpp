@@ -100,7 +100,7 @@ TEST(DdsCodec, RequestBodiesBothWays) {
   EXPECT_EQ(empty_batch.knot_count, 0u);
   EXPECT_TRUE(empty_batch.inputs.empty());
 
-  EXPECT_EQ(viaRequest(rpc::ListFunctionsRequest{"model-9"}).model_id, "model-9");
+  EXPECT_EQ(viaRequest(rpc::ListFunctionsRequest{"model-9", 0, ""}).model_id, "model-9");
   const auto paged = viaRequest(rpc::ListFunctionsRequest{"model-9", 50, "page-7"});
   EXPECT_EQ(paged.page_size, 50u);
   EXPECT_EQ(paged.page_token, "page-7");

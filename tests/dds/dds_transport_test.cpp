@@ -85,7 +85,7 @@ TEST_F(DdsTransport, EveryMethodRoundTrips) {
   EXPECT_EQ(function.outputs[1].col_indices, (std::vector<std::uint32_t>{2}));
 
   rpc::ListFunctionsReply list;
-  s = client.listFunctions({"model-1"}, list);
+  s = client.listFunctions({"model-1", 0, ""}, list);
   ASSERT_TRUE(s.ok()) << s.message;
   ASSERT_EQ(list.functions.size(), 2u);
   EXPECT_EQ(list.functions[0].evaluations, 12345678901ull);

@@ -110,7 +110,7 @@ TEST(Service, ReferencesAndRelease) {
   EXPECT_EQ(r.references_left, 0u);
   // The function keeps its model loaded: listed, and more functions can be asked of it.
   rpc::ListFunctionsReply list;
-  ASSERT_TRUE(service->listFunctions(context(), {model_id}, list).ok());
+  ASSERT_TRUE(service->listFunctions(context(), {model_id, 0, ""}, list).ok());
   ASSERT_EQ(list.functions.size(), 1u);
   EXPECT_EQ(list.functions[0].function_name, "rnea");
   EXPECT_EQ(list.functions[0].model_id, model_id);
@@ -152,7 +152,7 @@ TEST(Service, ListFunctionsFiltersByModel) {
   EXPECT_EQ(all.functions[0].function_id, fa);  // in the order they were asked for
   EXPECT_EQ(all.functions[1].function_id, fb);
   EXPECT_EQ(all.functions[2].function_id, fa2);
-  ASSERT_TRUE(service->listFunctions(context(), {a}, of_a).ok());
+  ASSERT_TRUE(service->listFunctions(context(), {a, 0, ""}, of_a).ok());
   ASSERT_EQ(of_a.functions.size(), 2u);
   for (const rpc::FunctionSummary& f : of_a.functions) {
     EXPECT_EQ(f.model_id, a);

@@ -88,7 +88,7 @@ TEST(ShmCodec, GetFunction) {
 }
 
 TEST(ShmCodec, ListFunctionsReleaseHealthRequests) {
-  EXPECT_EQ(roundTrip(rpc::ListFunctionsRequest{"m"}).model_id, "m");
+  EXPECT_EQ(roundTrip(rpc::ListFunctionsRequest{"m", 0, ""}).model_id, "m");
   const auto paged = roundTrip(rpc::ListFunctionsRequest{"m", 50, "page-7"});
   EXPECT_EQ(paged.page_size, 50u);
   EXPECT_EQ(paged.page_token, "page-7");

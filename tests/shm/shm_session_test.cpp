@@ -58,7 +58,9 @@ TEST_F(ShmSessions, OpenAndCloseManyWithoutLeak) {
     ASSERT_TRUE(evaluates(*c)) << "connection " << i;
     c.reset();
     // Closed sessions are swept every 200 ms: let them go before the cap (64) is reached.
-    if (i % 20 == 19) ASSERT_TRUE(waitUntil([&] { return server_->openSessions() == 1; }, 5s)) << i;
+    if (i % 20 == 19) {
+      ASSERT_TRUE(waitUntil([&] { return server_->openSessions() == 1; }, 5s)) << i;
+    }
   }
   const double per_connection_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / 200;

@@ -74,7 +74,7 @@ TEST_F(ShmTransport, EveryMethodRoundTrips) {
   EXPECT_EQ(bad.message, "model_id is empty");
 
   rpc::ListFunctionsReply list;
-  ASSERT_TRUE(c->listFunctions({"m"}, list).ok());
+  ASSERT_TRUE(c->listFunctions({"m", 0, ""}, list).ok());
   ASSERT_EQ(list.functions.size(), 2u);
   EXPECT_EQ(list.functions[1].message, "compiler crashed");
 

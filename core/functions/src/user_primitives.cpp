@@ -237,7 +237,7 @@ Value<Sym> callPrimitive(const PrimitiveContext& context, const PrimitiveSignatu
   std::vector<const Value<Sym>*> values;
   for (const PrimitiveArg<Sym>& a : args) values.push_back(&a.value);
   const std::string name = signature.name;
-  PrimitiveCall call{context, name, v, s, values};
+  PrimitiveCall call{context, name, v, s, values, {}};
   call.value = [&context, name](const std::vector<VecX<Sym>>& x, const std::vector<std::string>& strings) {
     return primitiveValue<Sym>(context, name, x, strings);
   };
