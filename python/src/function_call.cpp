@@ -10,6 +10,7 @@
 
 #include "array_views.hpp"
 #include "errors.hpp"
+#include "robodiff/language/suggest.hpp"
 
 namespace nb = nanobind;
 
@@ -81,35 +82,14 @@ bool hasShape(const DoubleArrayView& view, const std::vector<std::size_t>& shape
   return true;
 }
 
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
+// " (did you mean 'q'?)" with the one closest name, or "" when none is close
+// (language::closestNames: the same hint the spec errors give).
+std::string suggestion(const std::string& given, const std::vector<std::string>& names) {
+  const std::vector<std::string> closest = language::closestNames(given, names, 1);
+  return closest.empty() ? "" : " (did you mean '" + closest.front() + "'?)";
 }
 
 }  // namespace
-
-std::string closestName(const std::string& given, const std::vector<std::string>& names) {
-  std::string best;
-  std::size_t best_distance = SIZE_MAX;
-  for (const std::string& name : names) {
-    const std::size_t d = editDistance(given, name);
-    if (d < best_distance) {
-      best = name;
-      best_distance = d;
-    }
-  }
-  return best;
-}
 
 struct PyFunction::Arguments {
   std::vector<DoubleArrayView> inputs;     // in input order
@@ -166,8 +146,8 @@ void PyFunction::refuseNames(nb::kwargs kwargs) const {
   for (auto [key, value] : kwargs) {
     const std::string name = textOf(key);
     if (name != "out" && std::find(input_names_.begin(), input_names_.end(), name) == input_names_.end())
-      throw nb::type_error(("unknown input '" + name + "' (did you mean '" + closestName(name, input_names_) +
-                            "'?); the inputs are " + inputsText())
+      throw nb::type_error(("unknown input '" + name + "'" + suggestion(name, input_names_) + "; the inputs are " +
+                            inputsText())
                                .c_str());
   }
   for (std::size_t i = 0; i < input_names_.size(); ++i)
@@ -220,8 +200,8 @@ void PyFunction::parseOut(nb::handle out, Arguments& args) const {
   for (auto [key, value] : nb::borrow<nb::dict>(out)) {
     const std::string name = textOf(key);
     if (std::find(output_names_.begin(), output_names_.end(), name) == output_names_.end())
-      throw nb::type_error(("out: unknown output '" + name + "' (did you mean '" + closestName(name, output_names_) +
-                            "'?); the outputs are " + outputsText())
+      throw nb::type_error(("out: unknown output '" + name + "'" + suggestion(name, output_names_) + "; the outputs are " +
+                            outputsText())
                                .c_str());
   }
 }

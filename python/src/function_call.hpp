@@ -56,7 +56,4 @@ class PyFunction {
   nanobind::object csr_matrix_;  // scipy.sparse.csr_matrix, or None without scipy
 };
 
-// The name in `names` closest to `given` (edit distance), for "did you mean" hints.
-std::string closestName(const std::string& given, const std::vector<std::string>& names);
-
 }  // namespace robodiff::python
