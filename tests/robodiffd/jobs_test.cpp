@@ -111,8 +111,15 @@ class Jobs : public ::testing::TestWithParam<std::string> {
   // killed child not yet reaped (state Z) runs nothing and does not count.
   std::vector<pid_t> busyWorkers() const {
     auto parentOf = [](pid_t pid) -> pid_t {
-      std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-      std::string text((std::istreambuf_iterator<char>(stat)), {});
+      // A process that exits between open and read makes the read fail with ESRCH,
+      // which libstdc++ throws: such a process has no parent to report.
+      std::string text;
+      try {
+        std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+        text.assign(std::istreambuf_iterator<char>(stat), {});
+      } catch (const std::ios_base::failure&) {
+        return -1;
+      }
       const auto close = text.rfind(')');
       if (close == std::string::npos || close + 2 >= text.size() || text[close + 2] == 'Z') return -1;
       return static_cast<pid_t>(std::atol(text.c_str() + close + 4));  // ") S ppid"
