@@ -18,6 +18,7 @@ namespace robodiff::batch {
 
 namespace {
 constexpr double kCoefficientNoise = 1e-10;  // |K_ij| below this: rounding, set to 0
+constexpr double kTieBreak = 1e-6;           // column scale step that decides ties (see below)
 }
 
 BaseParameters baseParametersOf(const Eigen::Ref<const Eigen::MatrixXd>& W, double tolerance) {
@@ -25,7 +26,12 @@ BaseParameters baseParametersOf(const Eigen::Ref<const Eigen::MatrixXd>& W, doub
   if (W.rows() < W.cols())
     throw IdentificationError("base parameters need at least as many regressor rows (" + std::to_string(W.rows()) +
                               ") as standard parameters (" + std::to_string(n) + ")");
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(W);
+  // Columns often tie exactly (parameters that only ever act together); the pivoting
+  // would then pick by rounding noise, so by compiler flags and CPU. Scaling column j by
+  // 1 + j * kTieBreak makes the later column win every tie, the same on every build;
+  // K is scaled back below.
+  const Eigen::VectorXd scale = Eigen::VectorXd::LinSpaced(n, 0.0, n - 1.0) * kTieBreak + Eigen::VectorXd::Ones(n);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(W * scale.asDiagonal());
   const Eigen::MatrixXd R = qr.matrixR().topRows(n).triangularView<Eigen::Upper>();
   const double top = n > 0 ? std::abs(R(0, 0)) : 0.0;
   if (!(top > 0)) throw IdentificationError("the regressor is zero: no inertial parameter affects the torques");
@@ -52,7 +58,9 @@ BaseParameters baseParametersOf(const Eigen::Ref<const Eigen::MatrixXd>& W, doub
   base.K.resize(r, n - r);
   for (int i = 0; i < r; ++i)
     for (int d = 0; d < n - r; ++d) {
-      const double k = K_pivoted(ind_order[static_cast<std::size_t>(i)], dep_order[static_cast<std::size_t>(d)]);
+      const int ind = base.independent[static_cast<std::size_t>(i)], dep = base.dependent[static_cast<std::size_t>(d)];
+      const double k = K_pivoted(ind_order[static_cast<std::size_t>(i)], dep_order[static_cast<std::size_t>(d)]) *
+                       scale[ind] / scale[dep];
       base.K(i, d) = std::abs(k) < kCoefficientNoise ? 0.0 : k;
     }
   base.B = Eigen::MatrixXd::Zero(r, n);
