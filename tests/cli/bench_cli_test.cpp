@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -190,6 +191,70 @@ TEST(BenchCli, TimesEachLibraryFromItsCopies) {
   r = runCommand(bench(chain.urdf(), "--quick --copies 0"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--copies"), std::string::npos) << r.err;
+}
+
+// --spec FILE: a user function timed beside the built-in rows (row NAME with every output,
+// NAME_value with its values alone), with its build rows and a check against the
+// interpreter; a spec of values only gets one row; a built-in spec is named by its file.
+TEST(BenchCli, TimesUserSpecsGivenWithSpec) {
+  const fs::path urdf = testing::sourceDir() / "examples" / "robots" / "arm7.urdf";
+  const ChainDir scratch(1);  // only its directory
+  const fs::path knot = scratch.dir() / "knot.json", values = scratch.dir() / "values.json",
+                 crba = scratch.dir() / "mass-matrix.json";
+  std::ofstream(knot) << R"json({"name": "knot", "inputs": {"q": "configuration", "v": "nv", "u": "nv",
+      "dt": {"fixed": [0.01]}, "target": {"fixed": [0.4, 0.1, 0.5]}},
+    "define": {"v_next": "v + dt * aba(q, v, u)", "l": "sumsq(frame_position(q, 'link7') - target) + 1e-3 * sumsq(u)"},
+    "outputs": [{"name": "v_next", "kind": "value", "of": "v_next"}, {"name": "l", "kind": "value", "of": "l"},
+      {"name": "dv_next", "kind": "jacobian", "of": "v_next", "wrt": ["q", "v", "u"]},
+      {"name": "grad", "kind": "gradient", "of": "l", "wrt": ["q", "u"]}]})json";
+  std::ofstream(values) << R"json({"name": "values_only", "inputs": {"q": "configuration"},
+    "outputs": [{"name": "p", "kind": "value", "of": "frame_position(q, 'link7')"}]})json";
+  std::ofstream(crba) << R"json({"function": "crba", "outputs": [{"kind": "value"}]})json";
+  const testing::ProcessResult r = runCommand(bench(urdf, "--json --quick --spec " + shellQuote(knot.string()) +
+                                                              " --spec " + shellQuote(values.string()) + " --spec " +
+                                                              shellQuote(crba.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::json& rows = j.at("rows");
+  for (const char* name : {"knot", "knot_value", "values_only", "mass_matrix"}) {
+    const nlohmann::json* row = findRow(rows, name);
+    ASSERT_NE(row, nullptr) << "no row " << name;
+    const double t = row->at("us_per_call").get<double>();
+    EXPECT_TRUE(std::isfinite(t) && t > 0 && t < 1e5) << name << " = " << t;
+    EXPECT_GT(number(*findRow(rows, std::string("build.") + name + ".total")), 0) << name;
+    EXPECT_GT(number(*findRow(rows, std::string("build.") + name + ".compiler_peak_memory")), 0) << name;
+    EXPECT_LT(j.at("checks").at(std::string("interpreter_vs_compiled_") + name).get<double>(), 1e-9) << name;
+  }
+  EXPECT_EQ(findRow(rows, "values_only_value"), nullptr);
+  EXPECT_EQ(findRow(rows, "mass_matrix_value"), nullptr);
+  // Values alone cost less than values with a 7 x 21 Jacobian and a gradient.
+  EXPECT_LT(findRow(rows, "knot_value")->at("us_per_call").get<double>(),
+            findRow(rows, "knot")->at("us_per_call").get<double>());
+  EXPECT_NE(findRow(rows, "rnea_jacobian_dense"), nullptr);  // the built-in rows are still there
+}
+
+TEST(BenchCli, BadSpecsFailNamingTheProblem) {
+  const fs::path urdf = testing::sourceDir() / "examples" / "robots" / "arm7.urdf";
+  const ChainDir scratch(1);
+  const fs::path taken = scratch.dir() / "taken.json", broken = scratch.dir() / "broken.json";
+  std::ofstream(taken) << R"json({"name": "rnea_value", "inputs": {"q": "configuration"},
+    "outputs": [{"name": "g", "kind": "value", "of": "gravity(q)"}]})json";
+  std::ofstream(broken) << R"json({"inputs": {"q": "configuration"}, "outputs": [{"name": "g", "kind": "value", "of": "gravty(q)"}]})json";
+  testing::ProcessResult r = runCommand(bench(urdf, "--quick --spec " + shellQuote(taken.string())));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("'rnea_value' is taken"), std::string::npos) << r.err;
+  r = runCommand(bench(urdf, "--quick --spec " + shellQuote(broken.string())));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("gravty"), std::string::npos) << r.err;
+  r = runCommand(bench(urdf, "--quick --spec /nonexistent/spec.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("spec.json"), std::string::npos) << r.err;
+  const fs::path twice = scratch.dir() / "twice.json";
+  std::ofstream(twice) << R"json({"name": "twice", "inputs": {"q": "configuration"},
+    "outputs": [{"name": "g", "kind": "value", "of": "gravity(q)"}]})json";
+  r = runCommand(bench(urdf, "--quick --spec " + shellQuote(twice.string()) + " --spec " + shellQuote(twice.string())));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("'twice' is taken"), std::string::npos) << r.err;
 }
 
 TEST(BenchCli, BadArgumentsFailWithAMessage) {

@@ -6,7 +6,9 @@
 // of 1,000 knots on one thread and on every hardware thread. Ratios come from the same
 // run; for the robots of ../shared/notes/anchors.md (Panda, UR5, Talos with a fixed
 // base) the figures of Pinocchio and CppADCodeGen on this machine kind are shown, and
-// the targets get PASS or MISS.
+// the targets get PASS or MISS. `--spec FILE` adds a function of the user's
+// own (bench_fixtures.hpp, userBenchSpecs): built, timed and checked against the
+// interpreter like the rest.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -30,6 +32,7 @@ using namespace bench;
 
 struct Options {
   std::string urdf, keep;
+  std::vector<std::string> specs;  // --spec: user functions timed too
   bool floating_base = false, json = false, markdown = false, quick = false;
   int copies = 3;
 };
@@ -89,18 +92,38 @@ class BenchRun {
 
   // Cold builds, one directory each; every library loaded from `copies` files.
   void buildAll() {
-    for (const SpecText& s : kSpecs) gens_.push_back(build(s));
+    // --spec functions first (a spec that cannot be built fails before the long builds),
+    // listed after the built-in rows.
+    std::vector<Generated> user;
+    for (const BenchSpec& s : userBenchSpecs(o_.specs, builtinRowNames())) {
+      user.push_back(build(s));
+      user_names_.push_back(s.name);
+    }
+    for (const BenchSpec& s : builtinBenchSpecs()) gens_.push_back(build(s));
+    for (Generated& g : user) gens_.push_back(std::move(g));
     const codegen::CompileReport& c = gens_.front().lib.compile;
     std::string flags;
     for (const std::string& f : c.flags) flags += " " + f;
     report_.code_flags = c.compiler + flags + " (" + std::string(codegen::kGeneratorVersion) + ")";
   }
 
-  Generated build(const SpecText& s) {
+  // Every row name a --spec row may not take.
+  static std::vector<std::string> builtinRowNames() {
+    std::vector<std::string> names = {"rnea_double", "aba_double", "rnea_fd"};
+    for (const SpecText& s : kSpecs) {
+      names.push_back(s.name);
+      names.push_back(std::string("interpreter_") + s.name);
+      names.push_back(std::string("batch_") + s.name + "_1_thread");
+      names.push_back(std::string("batch_") + s.name + "_all_threads");
+    }
+    return names;
+  }
+
+  Generated build(const BenchSpec& s) {
     Generated g;
     g.name = s.name;
     g.label = s.label;
-    g.spec = parseFunctionSpec(withBuild(s.json), std::string("bench:") + s.name);
+    g.spec = parseFunctionSpec(s.json, s.source);
     LibraryOptions options;
     options.compiler.jobs = 0;  // one per hardware thread
     options.builder.name = s.name;
@@ -115,7 +138,7 @@ class BenchRun {
     progress(line);
     g.copies.push_back(codegen::LoadedLibrary::open(g.lib.library).function(s.name));
     for (int c = 1; c < o_.copies; ++c) {
-      const fs::path copy = dir_.path() / (std::string(s.name) + "_copy" + std::to_string(c) + ".so");
+      const fs::path copy = dir_.path() / (s.name + "_copy" + std::to_string(c) + ".so");
       fs::copy_file(g.lib.library, copy, fs::copy_options::overwrite_existing);
       g.copies.push_back(codegen::LoadedLibrary::open(copy).function(s.name));
     }
@@ -305,11 +328,26 @@ class BenchRun {
         relativeError(interpreted_.at("rnea_jacobian_dense"), dense.output(1));
     checks["interpreter_vs_compiled_aba_jacobian"] =
         relativeError(interpreted_.at("aba_jacobian"), single_.at("aba_jacobian").output(1));
+    for (const std::string& name : user_names_)
+      checks["interpreter_vs_compiled_" + name] = userAgainstInterpreter(gen(name));
     for (auto it = checks.begin(); it != checks.end(); ++it) {
       const double err = it.value().get<double>(), limit = it.key() == "rnea_jacobian_vs_fd" ? 1e-5 : 1e-9;
       if (!(err <= limit))
         std::cerr << "bench: warning: check " << it.key() << " = " << err << " (limit " << limit << ")\n";
     }
+  }
+
+  // The largest relative error of a --spec function's compiled outputs (at the timed
+  // state) against the interpreter's, over every output block.
+  double userAgainstInterpreter(const Generated& g) {
+    const codegen::Interpreter interp(*g.lib.built.graph, g.lib.built.definition);
+    const Buffers& compiled = single_.at(g.name);
+    Buffers b(model_, g, 1, interp.workSize());
+    interp.evaluate(b.in_ptr.data(), b.out_ptr.data(), b.work.data());
+    double err = 0;
+    for (std::size_t blk = 0; blk < b.out.size(); ++blk)
+      err = std::max(err, relativeError(compiled.output(blk), b.output(blk)));
+    return err;
   }
 
   void addGenerationRows(const Generated& g) {
@@ -350,6 +388,7 @@ class BenchRun {
   Data<double> data_;
   Report report_;
   std::vector<Generated> gens_;
+  std::vector<std::string> user_names_;                 // the --spec rows
   Eigen::VectorXd q_, v_, a_, qa_, va_, tau_;
   std::map<std::string, Buffers> single_;                // each function's buffers at one state
   std::map<std::string, Eigen::VectorXd> interpreted_;  // the interpreter's Jacobians
@@ -375,6 +414,13 @@ void addBenchCommand(CLI::App& app) {
                   "(identical bytes on other memory pages run up to 2x apart here)")
       ->check(CLI::Range(1, 15))
       ->capture_default_str();
+  cmd->add_option("--spec", options->specs,
+                  "Also build and time this function spec (repeatable; a user function, docs/function-language.md, "
+                  "or a built-in one): row NAME (the spec's \"name\", else the file's stem) with every output, and "
+                  "NAME_value with its value outputs alone when it has others; each with its build rows, and checked "
+                  "against the interpreter (checks.interpreter_vs_compiled_NAME)")
+      ->type_name("SPEC.json")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--keep", options->keep,
                   "Build the libraries in DIR and keep them (default: a temporary directory, removed)");
   cmd->callback([options] { BenchRun(*options).run(); });

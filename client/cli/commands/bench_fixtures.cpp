@@ -7,7 +7,10 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iterator>
 #include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "robodiff/functions/reference.hpp"
 
@@ -140,6 +143,66 @@ std::string withBuild(const char* json) {
   std::string s = json;
   s.insert(s.size() - 1, R"(, "build": {"optimization": "O2", "march_native": true})");
   return s;
+}
+
+std::vector<BenchSpec> builtinBenchSpecs() {
+  std::vector<BenchSpec> specs;
+  for (const SpecText& s : kSpecs) specs.push_back({s.name, s.label, withBuild(s.json), std::string("bench:") + s.name});
+  return specs;
+}
+
+namespace user_spec_detail {
+
+// The file's stem with every character outside [A-Za-z0-9_] made '_' (a C name).
+std::string identifierFromStem(const fs::path& path) {
+  std::string s = path.stem().string();
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) s = "spec_" + s;
+  return s;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument("--spec " + path + ": cannot read the file");
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The spec with only its "value" outputs (empty when it has none, or nothing else).
+std::optional<nlohmann::json> valueOutputsOnly(const nlohmann::json& spec) {
+  nlohmann::json values = nlohmann::json::array();
+  for (const nlohmann::json& o : spec.at("outputs"))
+    if (o.value("kind", "") == "value") values.push_back(o);
+  if (values.empty() || values.size() == spec.at("outputs").size()) return std::nullopt;
+  nlohmann::json v = spec;
+  v["outputs"] = values;
+  return v;
+}
+
+}  // namespace user_spec_detail
+
+std::vector<BenchSpec> userBenchSpecs(const std::vector<std::string>& paths, std::vector<std::string> taken) {
+  using namespace user_spec_detail;
+  std::vector<BenchSpec> specs;
+  auto add = [&](const std::string& path, BenchSpec s) {
+    if (std::find(taken.begin(), taken.end(), s.name) != taken.end())
+      throw std::invalid_argument("--spec " + path + ": the row name '" + s.name +
+                                  "' is taken by another row (give the spec another \"name\")");
+    taken.push_back(s.name);
+    specs.push_back(std::move(s));
+  };
+  for (const std::string& path : paths) {
+    const FunctionSpec parsed = loadFunctionSpec(path);  // a bad spec fails here, naming the file and field
+    const nlohmann::json spec = nlohmann::json::parse(readText(path));
+    const std::string name = parsed.isUser() && spec.contains("name") ? parsed.functionName() : identifierFromStem(path);
+    const std::optional<nlohmann::json> values = valueOutputsOnly(spec);
+    add(path, {name, name + (values ? " (values + derivatives)" : ""), spec.dump(), path});
+    if (!values) continue;
+    nlohmann::json v = *values;
+    if (parsed.isUser()) v["name"] = name + "_value";
+    add(path, {name + "_value", name + " (values only)", v.dump(), path + " (its value outputs)"});
+  }
+  return specs;
 }
 
 Buffers::Buffers(const Model& model, const Generated& g, std::uint64_t knots, std::size_t work_size)

@@ -59,6 +59,20 @@ extern const std::vector<SpecText> kSpecs;
 // The spec with the build every bench function uses (O2, -march=native).
 std::string withBuild(const char* json);
 
+// A function `robodiff bench` builds and times: its row name (also the C name), label,
+// spec text, and where the spec came from (for errors).
+struct BenchSpec {
+  std::string name, label, json, source;
+};
+// The built-in rows (kSpecs, each with withBuild).
+std::vector<BenchSpec> builtinBenchSpecs();
+// `--spec FILE`, each: the whole spec as row NAME (the spec's "name", else the file's
+// stem made an identifier) and, when it has outputs besides values, its value outputs
+// alone as row NAME_value. Its own build options are kept (the defaults are the same as
+// the built-in rows'). Throws std::invalid_argument naming the file for a spec that does
+// not parse, or a row name that is in `taken` or given twice.
+std::vector<BenchSpec> userBenchSpecs(const std::vector<std::string>& paths, std::vector<std::string> taken);
+
 struct Generated {
   std::string name, label;
   FunctionSpec spec;
