@@ -34,6 +34,11 @@ std::vector<State> drawStates(const pinocchio::Model& model, unsigned seed, int 
 struct Output {
   Eigen::VectorXd value;
   Eigen::MatrixXd jacobian;  // empty for value rows; for CRBA / frame J the matrix itself
+  // The step + cost rows (step_rows.hpp): the cost's gradient w.r.t. [q, v, u] and its
+  // Gauss-Newton Hessian; `exact_hessian` only from Pinocchio (central differences of
+  // its analytic gradient), what robodiff's exact Hessian is checked against.
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd hessian, exact_hessian;
 };
 
 // One timed row of a side.

@@ -1,7 +1,9 @@
 """bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio and
-CppADCodeGen) and `robodiff bench --json`, two rounds, keeps the minimum per cell, checks
-robodiff's values and Jacobians (`robodiff compute --backend generated`) against
-Pinocchio's analytic ones at the anchors' check states, and prints one table per robot.
+CppADCodeGen; on a fixed base also the step rows of Pinocchio and crocoddyl) and
+`robodiff bench --json` (with the step rows' specs, specs/, on a fixed base), two rounds,
+keeps the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
+--backend generated`) against Pinocchio's at the anchors' check states, and prints one
+table per robot.
 
 Run through bench/anchors/run (it builds anchors_bench and passes the paths)."""
 import argparse
@@ -16,6 +18,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report  # noqa: E402
 import robots  # noqa: E402
+import step_specs  # noqa: E402
+import mujoco_side  # noqa: E402
 
 LIMIT = 1e-9  # relative error (scaled by max(1, |reference|)) a side may have
 
@@ -54,10 +58,12 @@ def anchors_round(args, robot, work, reuse):
         return json.load(f)
 
 
-def robodiff_round(args, robot):
+def robodiff_round(args, robot, specs):
     cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json"]
     cmd += ["--floating-base"] if robot.floating_base else []
     cmd += ["--quick"] if args.quick else []
+    for path in specs:
+        cmd += ["--spec", path]
     return json.loads(run(cmd))
 
 
@@ -67,8 +73,8 @@ def keep_min(slot, us):
 
 
 def merge_anchors(result, data):
-    for side in ("pinocchio", "cppadcodegen"):
-        for row in data["sides"][side]:
+    for side in ("pinocchio", "cppadcodegen", "crocoddyl"):
+        for row in data["sides"].get(side, []):
             slot = result["rows"].setdefault(row["name"], {}).setdefault(side, {})
             slot["status"] = row["status"]
             if row["note"]:
@@ -89,9 +95,11 @@ def merge_anchors(result, data):
 def merge_robodiff(result, data):
     rows = {r["name"]: r for r in data["rows"]}
     for name, _ in report.ROWS:
-        if name in rows and "us_per_call" in rows[name]:
-            keep_min(result["rows"].setdefault(name, {}).setdefault("robodiff", {}), rows[name]["us_per_call"])
-        total, mem = rows.get(f"build.{name}.total"), rows.get(f"build.{name}.compiler_peak_memory")
+        bench_name = step_specs.BENCH_ROWS.get(name, name)  # robodiff bench's name of the row
+        if bench_name in rows and "us_per_call" in rows[bench_name]:
+            keep_min(result["rows"].setdefault(name, {}).setdefault("robodiff", {}), rows[bench_name]["us_per_call"])
+        total = rows.get(f"build.{bench_name}.total")
+        mem = rows.get(f"build.{bench_name}.compiler_peak_memory")
         if total is not None:
             b = result["builds"].setdefault(name, {}).setdefault("robodiff", {})
             b["seconds"] = min(b.get("seconds", float("inf")), total["seconds"])
@@ -145,24 +153,38 @@ def measure(args, robot):
     os.makedirs(work, exist_ok=True)
     result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
               "rows": {}, "builds": {}, "checks": {}}
-    first = None
+    first, specs = None, []
     for r in range(args.rounds):
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio + CppADCodeGen ...", file=sys.stderr)
         data = anchors_round(args, robot, work, reuse=r > 0)
+        if first is None and not robot.floating_base:  # the step rows: fixed-base robots only
+            specs = step_specs.write_specs(data["frame"], work)
         first = first or data
         merge_anchors(result, data)
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: robodiff bench ...", file=sys.stderr)
-        merge_robodiff(result, robodiff_round(args, robot))
+        merge_robodiff(result, robodiff_round(args, robot, specs))
+        mujoco_side.measure_round(args.bench, robot, work, first, args.quick, result)
     result["nq"], result["nv"] = first["nq"], first["nv"]
-    for row in first["sides"]["cppadcodegen"]:
-        if row["status"] == "ok":
-            result["checks"][f"CppADCodeGen {row['name']}"] = f"{row['max_err']:.1e}"
+    for side, title in (("cppadcodegen", "CppADCodeGen"), ("crocoddyl", "crocoddyl")):
+        for row in first["sides"].get(side, []):
+            if row["status"] == "ok":
+                result["checks"][f"{title} {row['name']}"] = f"{row['max_err']:.1e}"
     print(f"anchors: {robot.title}: checking robodiff's values and Jacobians ...", file=sys.stderr)
-    for row, err in check_robodiff(args, robot, first, work).items():
+    errors, hessian_err = check_robodiff(args, robot, first, work), None
+    if specs:
+        step_errors, hessian_err = step_specs.check_robodiff(args.robodiff, robot, first, work, rel_err, run)
+        errors.update(step_errors)
+    for row, err in errors.items():
         result["checks"][f"robodiff {row}"] = f"{err:.1e}"
         if not err <= LIMIT:
             slot = result["rows"][row].setdefault("robodiff", {})
             slot["us"], slot["note"] = None, f"WRONG: max err {err:.3g}"
+    if hessian_err is not None:
+        result["checks"]["robodiff step_cost exact Hessian vs central differences of Pinocchio's gradient "
+                         f"(limit {step_specs.FD_HESSIAN_LIMIT:g})"] = f"{hessian_err:.1e}"
+        if not hessian_err <= step_specs.FD_HESSIAN_LIMIT:
+            slot = result["rows"]["step_cost_derivatives"].setdefault("robodiff", {})
+            slot["us"], slot["note"] = None, f"WRONG: Hessian vs FD {hessian_err:.3g}"
     return result
 
 
@@ -182,7 +204,8 @@ def main():
     results = [measure(args, robot) for robot in selected]
     minutes = (time.monotonic() - t0) / 60
     header = (f"bench/anchors, {time.strftime('%Y-%m-%d', time.gmtime())}, {machine()}; Pinocchio 3.7.0 (pin wheel), "
-              f"CppADCodeGen 2.4.3 (gcc -O2 -march=native), robodiff bench; µs per call, minimum of {args.rounds} "
+              f"CppADCodeGen 2.4.3 (gcc -O2 -march=native), crocoddyl {step_specs.crocoddyl_version()} "
+              f"(calc / calc + calcDiff), {mujoco_side.title()}, robodiff bench; µs per call, minimum of {args.rounds} "
               f"alternating rounds{' (--quick)' if args.quick else ''}; ratio = robodiff / the best anchor; "
               f"run took {minutes:.1f} min")
     report.print_tables(results, header)

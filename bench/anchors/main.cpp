@@ -1,6 +1,7 @@
 // anchors_bench: times Pinocchio's analytic algorithms and CppADCodeGen's generated code
-// for one robot, the same way `robodiff bench` times its own (bench_timing.hpp), checks
-// CppADCodeGen's values and Jacobians against Pinocchio's at a few states (1e-9
+// for one robot, the same way `robodiff bench` times its own (bench_timing.hpp), and on a
+// fixed base the step rows (step_rows.hpp) of Pinocchio and crocoddyl; checks
+// CppADCodeGen's and crocoddyl's outputs against Pinocchio's at a few states (1e-9
 // relative), and writes everything as JSON (compare.py reads it).
 //
 //   anchors_bench --urdf FILE [--floating-base] --out FILE --workdir DIR
@@ -8,12 +9,14 @@
 //                 [--codegen-rows a,b,...] [--no-codegen]
 #include <pinocchio/parsers/urdf.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "anchors.hpp"
+#include "step_rows.hpp"
 
 namespace {
 
@@ -93,6 +96,15 @@ std::string matrixJson(const Eigen::MatrixXd& m) {
 }
 std::string optionalJson(const std::optional<double>& x) { return x ? number(*x) : "null"; }
 
+// The step + cost rows' extra outputs, when there are any.
+std::string stepOutputsJson(const anchors::Output& o) {
+  std::string s;
+  if (o.gradient.size()) s += ",\"gradient\":" + vectorJson(o.gradient);
+  if (o.hessian.size()) s += ",\"hessian\":" + matrixJson(o.hessian);
+  if (o.exact_hessian.size()) s += ",\"exact_hessian\":" + matrixJson(o.exact_hessian);
+  return s;
+}
+
 std::string rowJson(const anchors::RowResult& r, bool with_outputs) {
   std::string o = "{\"name\":" + quoted(r.name) + ",\"us_per_call\":" + optionalJson(r.us) +
                   ",\"build_seconds\":" + optionalJson(r.build_s) + ",\"compiler_mib\":" + optionalJson(r.compiler_mib) +
@@ -101,7 +113,7 @@ std::string rowJson(const anchors::RowResult& r, bool with_outputs) {
     o += ",\"outputs\":[";
     for (size_t k = 0; k < r.outputs.size(); ++k)
       o += std::string(k ? "," : "") + "{\"value\":" + vectorJson(r.outputs[k].value) +
-           ",\"jacobian\":" + matrixJson(r.outputs[k].jacobian) + "}";
+           ",\"jacobian\":" + matrixJson(r.outputs[k].jacobian) + stepOutputsJson(r.outputs[k]) + "}";
     o += "]";
   }
   return o + "}";
@@ -113,15 +125,20 @@ std::string sideJson(const std::vector<anchors::RowResult>& rows, bool with_outp
   return o + "]";
 }
 
-// Checks `side` against Pinocchio's outputs; a row that disagrees loses its figure.
+// Checks `side` against Pinocchio's outputs (the row of the same name); a row that
+// disagrees loses its figure. Hessians: Gauss-Newton against Gauss-Newton.
 void checkAgainst(const std::vector<anchors::RowResult>& reference, std::vector<anchors::RowResult>& side) {
-  for (size_t i = 0; i < side.size(); ++i) {
-    anchors::RowResult& r = side[i];
+  for (anchors::RowResult& r : side) {
     if (r.status != "ok") continue;
+    const auto ref = std::find_if(reference.begin(), reference.end(), [&](const auto& x) { return x.name == r.name; });
+    if (ref == reference.end()) throw std::logic_error("no Pinocchio row " + r.name);
     double err = 0;
     for (size_t k = 0; k < r.outputs.size(); ++k) {
-      err = std::max(err, anchors::relativeError(r.outputs[k].value, reference[i].outputs[k].value));
-      err = std::max(err, anchors::relativeError(r.outputs[k].jacobian, reference[i].outputs[k].jacobian));
+      const anchors::Output &o = r.outputs[k], &e = ref->outputs[k];
+      for (auto [a, b] : {std::pair{&o.value, &e.value}, std::pair{&o.gradient, &e.gradient}})
+        err = std::max(err, anchors::relativeError(*a, *b));
+      for (auto [a, b] : {std::pair{&o.jacobian, &e.jacobian}, std::pair{&o.hessian, &e.hessian}})
+        err = std::max(err, anchors::relativeError(*a, *b));
     }
     r.max_err = err;
     if (!(err <= kLimit)) {
@@ -142,7 +159,15 @@ int run(const Args& a) {
   const std::vector<anchors::State> checks(states.begin() + 1, states.end());
 
   std::fprintf(stderr, "anchors_bench: %s (nq %d, nv %d): Pinocchio ...\n", model.name.c_str(), model.nq, model.nv);
-  const std::vector<anchors::RowResult> pin = anchors::runPinocchio(model, timed, checks, plan);
+  std::vector<anchors::RowResult> pin = anchors::runPinocchio(model, timed, checks, plan);
+  std::vector<anchors::RowResult> croc;
+  if (!a.floating_base) {  // the step rows are for fixed-base robots
+    std::fprintf(stderr, "anchors_bench: %s: the Euler step and cost, Pinocchio and crocoddyl ...\n", model.name.c_str());
+    const std::vector<anchors::RowResult> steps = anchors::runPinocchioStep(model, timed, checks, plan);
+    pin.insert(pin.end(), steps.begin(), steps.end());
+    croc = anchors::runCrocoddyl(model, timed, checks, plan);
+    checkAgainst(pin, croc);
+  }
   std::vector<anchors::RowResult> cg;
   if (a.codegen) {
     anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
@@ -161,7 +186,7 @@ int run(const Args& a) {
     out << (k ? "," : "") << "{\"q\":" << vectorJson(checks[k].q) << ",\"v\":" << vectorJson(checks[k].v)
         << ",\"a\":" << vectorJson(checks[k].a) << ",\"tau\":" << vectorJson(checks[k].tau) << "}";
   out << "],\n \"sides\":{\"pinocchio\":" << sideJson(pin, true) << ",\n  \"cppadcodegen\":" << sideJson(cg, false)
-      << "}}\n";
+      << ",\n  \"crocoddyl\":" << sideJson(croc, false) << "}}\n";
   if (!out) throw std::runtime_error("cannot write " + a.out);
   return 0;
 }

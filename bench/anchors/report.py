@@ -8,9 +8,19 @@ ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_
     ("aba_jacobian", "ABA value + J"),
     ("crba_value", "CRBA value"),
     ("frame_jacobian_value", "frame Jacobian value"),
+    # user-function rows (step_rows.hpp, step_specs.py): fixed-base robots only
+    ("euler_step_value", "Euler step value"),
+    ("euler_step_jacobian", "Euler step + J"),
+    ("step_cost_value", "step + cost value"),
+    ("step_cost_derivatives", "step + cost + derivatives"),
 ]
-BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"]
-SIDES = ["pinocchio", "cppadcodegen", "robodiff"]
+STEP_ROWS = ["euler_step_value", "euler_step_jacobian", "step_cost_value", "step_cost_derivatives"]
+BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"] + STEP_ROWS
+# the sides, in the tables' column order (robodiff last), and their titles
+SIDE_TITLES = {"pinocchio": "Pinocchio", "cppadcodegen": "CppADCodeGen", "crocoddyl": "crocoddyl",
+               "mujoco": "MuJoCo", "robodiff": "robodiff"}
+SIDES = list(SIDE_TITLES)
+ANCHORS = [s for s in SIDES if s != "robodiff"]
 
 
 def cell(entry):
@@ -32,7 +42,7 @@ def fmt(x, digits=3):
 
 def ratio_to_best(row):
     rd = (row.get("robodiff") or {}).get("us")
-    anchors = [(row.get(s) or {}).get("us") for s in ("pinocchio", "cppadcodegen")]
+    anchors = [(row.get(s) or {}).get("us") for s in ANCHORS]
     anchors = [a for a in anchors if a is not None]
     if rd is None or not anchors:
         return None
@@ -41,17 +51,20 @@ def ratio_to_best(row):
 
 def robot_table(result):
     lines = [f"### {result['title']} (nq {result['nq']}, nv {result['nv']})", "",
-             "| function | Pinocchio µs | CppADCodeGen µs | robodiff µs | robodiff / best |",
-             "|---|---|---|---|---|"]
+             "| function | " + " | ".join(f"{SIDE_TITLES[s]} µs" for s in SIDES) + " | robodiff / best |",
+             "|---|" + "---|" * (len(SIDES) + 1)]
     for name, label in ROWS:
+        if name in STEP_ROWS and result["floating_base"]:
+            lines.append(f"| {label} | " + " | ".join(["fixed base only"] * len(SIDES)) + " | – |")
+            continue
         row = result["rows"].get(name, {})
         r = ratio_to_best(row)
-        lines.append(f"| {label} | {cell(row.get('pinocchio'))} | {cell(row.get('cppadcodegen'))} | "
-                     f"{cell(row.get('robodiff'))} | {'–' if r is None else f'{r:.2f}'} |")
+        lines.append(f"| {label} | " + " | ".join(cell(row.get(s)) for s in SIDES) +
+                     f" | {'–' if r is None else f'{r:.2f}'} |")
     lines += ["", "| build (cold) | CppADCodeGen s | CppADCodeGen MiB | robodiff s | robodiff MiB | "
               "robodiff / CppADCodeGen (s, MiB) |", "|---|---|---|---|---|---|"]
     for name, label in ROWS:
-        if name not in BUILD_ROWS:
+        if name not in BUILD_ROWS or (name in STEP_ROWS and result["floating_base"]):
             continue
         b = result["builds"].get(name, {})
         cg, rd = b.get("cppadcodegen", {}), b.get("robodiff", {})
@@ -86,14 +99,19 @@ def plot(path, results):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     kinds = [r for r in ROWS if r[0] in BUILD_ROWS]
-    fig, axes = plt.subplots(1, len(kinds), figsize=(4.2 * len(kinds), 4), sharey=False)
-    styles = {"pinocchio": "o-", "cppadcodegen": "s--", "robodiff": "^-"}
+    cols = 4
+    rows = (len(kinds) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4 * rows), sharey=False, squeeze=False)
+    axes = axes.reshape(-1)
+    for ax in axes[len(kinds):]:
+        ax.set_visible(False)
+    styles = {"pinocchio": "o-", "cppadcodegen": "s--", "crocoddyl": "D-.", "mujoco": "v:", "robodiff": "^-"}
     for ax, (name, label) in zip(axes, kinds):
         for side in SIDES:
             pts = sorted((res["nv"], res["rows"][name][side]["us"]) for res in results
                          if (res["rows"].get(name, {}).get(side) or {}).get("us") is not None)
             if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], styles[side], label=side)
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], styles.get(side, "x:"), label=side)
         ax.set_title(label)
         ax.set_xlabel("degrees of freedom (nv)")
         ax.set_yscale("log")
