@@ -45,8 +45,8 @@ struct Output {
 struct RowResult {
   std::string name;
   std::optional<double> us;          // µs per call (empty: not timed)
-  std::optional<double> build_s;     // cold build: tape + generate + compile (CppADCodeGen)
-  std::optional<double> compiler_mib;  // peak memory of the compiler (CppADCodeGen)
+  std::optional<double> build_s;     // cold build: tape + generate + compile (CppADCodeGen, CasADi)
+  std::optional<double> compiler_mib;  // peak memory of the compiler (CppADCodeGen, CasADi)
   std::string status = "ok";         // ok | over_cap | wrong | failed
   std::string note;
   double max_err = 0;                // against Pinocchio's analytic outputs
@@ -80,5 +80,16 @@ struct CodegenOptions {
 std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
                                        const std::vector<State>& checks, const Timing& plan,
                                        const CodegenOptions& options);
+
+// CasADi: each of the four rows of `robodiff bench` (not CRBA, frame J) as Pinocchio's
+// algorithm on casadi::SX, a casadi::Function (value, or value + SX Jacobian over
+// [dq, v, a|tau]), C from casadi::CodeGenerator compiled with gcc -O3 -march=native
+// into a library of its own under options.workdir, called through the generated C
+// function. Builds, cap and reuse as CppADCodeGen's (casadi_side.cpp).
+std::vector<RowResult> runCasadi(const pinocchio::Model& model, const State& timed, const std::vector<State>& checks,
+                                 const Timing& plan, const CodegenOptions& options);
+
+// The version of the casadi library anchors_bench links.
+std::string casadiVersion();
 
 }  // namespace anchors

@@ -1,5 +1,5 @@
-"""bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio and
-CppADCodeGen; on a fixed base also the step rows of Pinocchio and crocoddyl) and
+"""bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio,
+CppADCodeGen and CasADi; on a fixed base also the step rows of Pinocchio and crocoddyl) and
 `robodiff bench --json` (with the step rows' specs, specs/, on a fixed base), two rounds,
 keeps the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
 --backend generated`) against Pinocchio's at the anchors' check states, and prints one
@@ -73,7 +73,7 @@ def keep_min(slot, us):
 
 
 def merge_anchors(result, data):
-    for side in ("pinocchio", "cppadcodegen", "crocoddyl"):
+    for side in ("pinocchio", "cppadcodegen", "casadi", "crocoddyl"):
         for row in data["sides"].get(side, []):
             slot = result["rows"].setdefault(row["name"], {}).setdefault(side, {})
             slot["status"] = row["status"]
@@ -84,8 +84,8 @@ def merge_anchors(result, data):
                 slot["wrong"] = True
             elif not slot.get("wrong"):
                 keep_min(slot, row["us_per_call"])
-            if side == "cppadcodegen" and row["status"] in ("ok", "over_cap"):
-                b = result["builds"].setdefault(row["name"], {}).setdefault("cppadcodegen", {})
+            if side in ("cppadcodegen", "casadi") and row["status"] in ("ok", "over_cap"):
+                b = result["builds"].setdefault(row["name"], {}).setdefault(side, {})
                 b.setdefault("seconds", row["build_seconds"])
                 b.setdefault("mib", row["compiler_mib"])
                 if row["note"]:
@@ -155,7 +155,8 @@ def measure(args, robot):
               "rows": {}, "builds": {}, "checks": {}}
     first, specs = None, []
     for r in range(args.rounds):
-        print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio + CppADCodeGen ...", file=sys.stderr)
+        print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio, CppADCodeGen, CasADi ...",
+              file=sys.stderr)
         data = anchors_round(args, robot, work, reuse=r > 0)
         if first is None and not robot.floating_base:  # the step rows: fixed-base robots only
             specs = step_specs.write_specs(data["frame"], work)
@@ -165,7 +166,8 @@ def measure(args, robot):
         merge_robodiff(result, robodiff_round(args, robot, specs))
         mujoco_side.measure_round(args.bench, robot, work, first, args.quick, result)
     result["nq"], result["nv"] = first["nq"], first["nv"]
-    for side, title in (("cppadcodegen", "CppADCodeGen"), ("crocoddyl", "crocoddyl")):
+    result["casadi_version"] = first.get("casadi_version")
+    for side, title in (("cppadcodegen", "CppADCodeGen"), ("casadi", "CasADi"), ("crocoddyl", "crocoddyl")):
         for row in first["sides"].get(side, []):
             if row["status"] == "ok":
                 result["checks"][f"{title} {row['name']}"] = f"{row['max_err']:.1e}"
@@ -202,9 +204,11 @@ def main():
     t0 = time.monotonic()
     selected = robots.resolve([k for k in args.robots.split(",") if k], args.work)
     results = [measure(args, robot) for robot in selected]
+    casadi = next((r["casadi_version"] for r in results if r.get("casadi_version")), "?")
     minutes = (time.monotonic() - t0) / 60
     header = (f"bench/anchors, {time.strftime('%Y-%m-%d', time.gmtime())}, {machine()}; Pinocchio 3.7.0 (pin wheel), "
-              f"CppADCodeGen 2.4.3 (gcc -O2 -march=native), crocoddyl {step_specs.crocoddyl_version()} "
+              f"CppADCodeGen 2.4.3 (gcc -O2 -march=native), CasADi {casadi} (SX, gcc -O3 -march=native), "
+              f"crocoddyl {step_specs.crocoddyl_version()} "
               f"(calc / calc + calcDiff), {mujoco_side.title()}, robodiff bench; µs per call, minimum of {args.rounds} "
               f"alternating rounds{' (--quick)' if args.quick else ''}; ratio = robodiff / the best anchor; "
               f"run took {minutes:.1f} min")

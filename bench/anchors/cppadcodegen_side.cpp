@@ -4,9 +4,9 @@
 // gcc -O2 -march=native into a dynamic library (DynamicModelLibraryProcessor +
 // GccCompiler), loaded and called through its GenericModel.
 //
-// Every library is built in a child process of its own: its wall time is the cold build
-// (tape + generate + compile), getrusage(RUSAGE_CHILDREN) there gives the compiler's
-// peak memory, and a build over the cap is killed (with its compilers) and reported.
+// Every library is built in a child process of its own (child_build.hpp): its wall time
+// is the cold build (tape + generate + compile), getrusage(RUSAGE_CHILDREN) there gives
+// the compiler's peak memory, and a build over the cap is killed and reported.
 //
 // Jacobians are w.r.t. [q in the tangent space, v, a or tau], as Pinocchio's analytic
 // derivatives: the tape's inputs are [q, dq, v, a] with q' = integrate(q, dq), and the
@@ -21,18 +21,11 @@
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <memory>
-#include <thread>
 
 #include "anchors.hpp"
+#include "child_build.hpp"
 
 namespace anchors {
 namespace {
@@ -139,80 +132,6 @@ void generateAndCompile(const std::string& row, const pinocchio::Model& model, c
 
 fs::path libraryPath(const fs::path& dir, const std::string& row) { return dir / ("anchor_" + row + ".so"); }
 
-// Builds `row`'s library in dir in a child process, within the cap. Fills build_s,
-// compiler_mib and status; records them in dir/build.txt for a later --reuse.
-void buildInChild(const std::string& row, const pinocchio::Model& model, const State& s, const fs::path& dir,
-                  double cap, RowResult& r) {
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const auto t0 = std::chrono::steady_clock::now();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    setpgid(0, 0);
-    int code = 1;
-    try {
-      fs::current_path(dir);
-      generateAndCompile(row, model, s);
-      rusage ru{};
-      getrusage(RUSAGE_CHILDREN, &ru);
-      std::ofstream(dir / "compiler_kib") << ru.ru_maxrss << "\n";
-      code = 0;
-    } catch (const std::exception& e) {
-      std::ofstream(dir / "error") << e.what() << "\n";
-    }
-    _exit(code);
-  }
-  setpgid(pid, pid);
-  int status = 0;
-  bool over = false;
-  for (;;) {
-    if (waitpid(pid, &status, WNOHANG) == pid) break;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > cap) {
-      kill(-pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      over = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::ofstream record(dir / "build.txt");
-  if (over) {
-    r.status = "over_cap", r.note = "build > " + std::to_string(static_cast<int>(cap)) + " s";
-    record << "over_cap " << cap << "\n";
-    return;
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !fs::exists(libraryPath(dir, row))) {
-    std::string why = "build failed";
-    if (std::ifstream err(dir / "error"); err) std::getline(err, why);
-    r.status = "failed", r.note = why;
-    record << "failed\n";
-    return;
-  }
-  double kib = 0;
-  std::ifstream(dir / "compiler_kib") >> kib;
-  r.build_s = seconds, r.compiler_mib = kib / 1024.0;
-  record << "ok " << seconds << " " << *r.compiler_mib << "\n";
-}
-
-// A build of an earlier round, from dir/build.txt; false when there is none.
-bool reuseBuild(const std::string& row, const fs::path& dir, RowResult& r) {
-  std::ifstream record(dir / "build.txt");
-  std::string status;
-  if (!(record >> status)) return false;
-  if (status == "over_cap") {
-    double cap = 0;
-    record >> cap;
-    r.status = "over_cap", r.note = "build > " + std::to_string(static_cast<int>(cap)) + " s";
-    return true;
-  }
-  if (status != "ok" || !fs::exists(libraryPath(dir, row))) return false;
-  double s = 0, mib = 0;
-  record >> s >> mib;
-  r.build_s = s, r.compiler_mib = mib;
-  return true;
-}
-
 // A loaded library and its model, with preallocated input and output buffers.
 struct LoadedModel {
   std::unique_ptr<CppAD::cg::LinuxDynamicLib<double>> lib;
@@ -260,9 +179,10 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
       continue;
     }
     const fs::path dir = fs::path(options.workdir) / name;
-    if (!(options.reuse && reuseBuild(name, dir, r))) {
+    if (!(options.reuse && reuseBuild(dir, libraryPath(dir, name), r))) {
       std::fprintf(stderr, "anchors_bench: CppADCodeGen building %s ...\n", name.c_str());
-      buildInChild(name, model, timed, dir, options.cap_seconds, r);
+      const auto build = [&] { generateAndCompile(name, model, timed); };
+      buildInChild(dir, libraryPath(dir, name), options.cap_seconds, build, r);
     }
     if (r.status != "ok") {
       rows.push_back(std::move(r));

@@ -1,12 +1,13 @@
-// anchors_bench: times Pinocchio's analytic algorithms and CppADCodeGen's generated code
-// for one robot, the same way `robodiff bench` times its own (bench_timing.hpp), and on a
-// fixed base the step rows (step_rows.hpp) of Pinocchio and crocoddyl; checks
-// CppADCodeGen's and crocoddyl's outputs against Pinocchio's at a few states (1e-9
-// relative), and writes everything as JSON (compare.py reads it).
+// anchors_bench: times Pinocchio's analytic algorithms and CppADCodeGen's and CasADi's
+// generated code for one robot, the same way `robodiff bench` times its own
+// (bench_timing.hpp), and on a fixed base the step rows (step_rows.hpp) of Pinocchio and
+// crocoddyl; checks CppADCodeGen's, CasADi's and crocoddyl's outputs against Pinocchio's
+// at a few states (1e-9 relative), and writes everything as JSON (compare.py reads it).
 //
 //   anchors_bench --urdf FILE [--floating-base] --out FILE --workdir DIR
 //                 [--quick] [--cap SECONDS] [--reuse] [--seed N] [--checks N]
-//                 [--codegen-rows a,b,...] [--no-codegen]
+//                 [--codegen-rows a,b,...] [--no-codegen] [--no-casadi]
+// (CasADi's libraries go to WORKDIR/casadi; --codegen-rows, --cap and --reuse apply to both.)
 #include <pinocchio/parsers/urdf.hpp>
 
 #include <algorithm>
@@ -24,7 +25,7 @@ constexpr double kLimit = 1e-9;  // relative error a side may have against Pinoc
 
 struct Args {
   std::string urdf, out, workdir;
-  bool floating_base = false, quick = false, reuse = false, codegen = true;
+  bool floating_base = false, quick = false, reuse = false, codegen = true, casadi = true;
   double cap = 120;
   unsigned seed = 1;
   int checks = 3;
@@ -54,6 +55,7 @@ Args parseArgs(int argc, char** argv) {
     else if (k == "--quick") a.quick = true;
     else if (k == "--reuse") a.reuse = true;
     else if (k == "--no-codegen") a.codegen = false;
+    else if (k == "--no-casadi") a.casadi = false;
     else if (k == "--cap") a.cap = std::stod(next());
     else if (k == "--seed") a.seed = static_cast<unsigned>(std::stoul(next()));
     else if (k == "--checks") a.checks = std::stoi(next());
@@ -174,6 +176,12 @@ int run(const Args& a) {
     cg = anchors::runCppADCodeGen(model, timed, checks, plan, options);
     checkAgainst(pin, cg);
   }
+  std::vector<anchors::RowResult> cas;
+  if (a.casadi) {
+    anchors::CodegenOptions options{a.workdir + "/casadi", a.cap, a.reuse, a.codegen_rows};
+    cas = anchors::runCasadi(model, timed, checks, plan, options);
+    checkAgainst(pin, cas);
+  }
 
   std::ofstream out(a.out);
   out << "{\"robot\":" << quoted(model.name) << ",\"urdf\":" << quoted(a.urdf)
@@ -186,7 +194,8 @@ int run(const Args& a) {
     out << (k ? "," : "") << "{\"q\":" << vectorJson(checks[k].q) << ",\"v\":" << vectorJson(checks[k].v)
         << ",\"a\":" << vectorJson(checks[k].a) << ",\"tau\":" << vectorJson(checks[k].tau) << "}";
   out << "],\n \"sides\":{\"pinocchio\":" << sideJson(pin, true) << ",\n  \"cppadcodegen\":" << sideJson(cg, false)
-      << ",\n  \"crocoddyl\":" << sideJson(croc, false) << "}}\n";
+      << ",\n  \"casadi\":" << sideJson(cas, false) << ",\n  \"crocoddyl\":" << sideJson(croc, false)
+      << "},\n \"casadi_version\":" << quoted(anchors::casadiVersion()) << "}\n";
   if (!out) throw std::runtime_error("cannot write " + a.out);
   return 0;
 }

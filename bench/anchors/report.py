@@ -17,8 +17,10 @@ ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_
 STEP_ROWS = ["euler_step_value", "euler_step_jacobian", "step_cost_value", "step_cost_derivatives"]
 BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"] + STEP_ROWS
 # the sides, in the tables' column order (robodiff last), and their titles
-SIDE_TITLES = {"pinocchio": "Pinocchio", "cppadcodegen": "CppADCodeGen", "crocoddyl": "crocoddyl",
+SIDE_TITLES = {"pinocchio": "Pinocchio", "cppadcodegen": "CppADCodeGen", "casadi": "CasADi", "crocoddyl": "crocoddyl",
                "mujoco": "MuJoCo", "robodiff": "robodiff"}
+# the sides that build a library per row, in the build table's column order
+BUILDERS = ["cppadcodegen", "casadi", "robodiff"]
 SIDES = list(SIDE_TITLES)
 ANCHORS = [s for s in SIDES if s != "robodiff"]
 
@@ -61,19 +63,21 @@ def robot_table(result):
         r = ratio_to_best(row)
         lines.append(f"| {label} | " + " | ".join(cell(row.get(s)) for s in SIDES) +
                      f" | {'–' if r is None else f'{r:.2f}'} |")
-    lines += ["", "| build (cold) | CppADCodeGen s | CppADCodeGen MiB | robodiff s | robodiff MiB | "
-              "robodiff / CppADCodeGen (s, MiB) |", "|---|---|---|---|---|---|"]
+    lines += ["", "| build (cold) | " + " | ".join(f"{SIDE_TITLES[b]} s | {SIDE_TITLES[b]} MiB" for b in BUILDERS) +
+              " | robodiff / CppADCodeGen (s, MiB) |", "|---|" + "---|" * (2 * len(BUILDERS) + 1)]
     for name, label in ROWS:
         if name not in BUILD_ROWS or (name in STEP_ROWS and result["floating_base"]):
             continue
         b = result["builds"].get(name, {})
+        cells = []
+        for builder in BUILDERS:
+            e = b.get(builder, {})
+            cells += [fmt(e["seconds"]) if e.get("seconds") is not None else (e.get("note") or "–"), fmt(e.get("mib"))]
         cg, rd = b.get("cppadcodegen", {}), b.get("robodiff", {})
-        cg_s = fmt(cg.get("seconds")) if cg.get("seconds") is not None else (cg.get("note") or "–")
         rs = ("–" if cg.get("seconds") is None or rd.get("seconds") is None
               else f"{rd['seconds'] / cg['seconds']:.2f}")
         rm = ("–" if cg.get("mib") is None or rd.get("mib") is None else f"{rd['mib'] / cg['mib']:.2f}")
-        lines.append(f"| {label} | {cg_s} | {fmt(cg.get('mib'))} | {fmt(rd.get('seconds'))} | "
-                     f"{fmt(rd.get('mib'))} | {rs}, {rm} |")
+        lines.append(f"| {label} | " + " | ".join(cells) + f" | {rs}, {rm} |")
     checks = result.get("checks", {})
     if checks:
         lines += ["", "Checks against Pinocchio's analytic outputs (max relative error, limit 1e-9): " +
@@ -105,7 +109,8 @@ def plot(path, results):
     axes = axes.reshape(-1)
     for ax in axes[len(kinds):]:
         ax.set_visible(False)
-    styles = {"pinocchio": "o-", "cppadcodegen": "s--", "crocoddyl": "D-.", "mujoco": "v:", "robodiff": "^-"}
+    styles = {"pinocchio": "o-", "cppadcodegen": "s--", "casadi": "P--", "crocoddyl": "D-.", "mujoco": "v:",
+              "robodiff": "^-"}
     for ax, (name, label) in zip(axes, kinds):
         for side in SIDES:
             pts = sorted((res["nv"], res["rows"][name][side]["us"]) for res in results
