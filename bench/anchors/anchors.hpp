@@ -63,6 +63,22 @@ double relativeError(const Eigen::MatrixXd& actual, const Eigen::MatrixXd& expec
 // fk spec picks the robot's last link).
 pinocchio::FrameIndex lastFrame(const pinocchio::Model& model);
 
+// Every side's row loop: the runner's outputs at the check states, then its calls timed
+// at `timed`. Runner: output(row, state) -> Output, call(row, state).
+template <class Runner>
+std::vector<RowResult> timeRows(Runner& runner, const std::vector<std::string>& names, const State& timed,
+                                const std::vector<State>& checks, const Timing& plan) {
+  std::vector<RowResult> rows;
+  for (const std::string& name : names) {
+    RowResult r;
+    r.name = name;
+    for (const State& s : checks) r.outputs.push_back(runner.output(name, s));
+    r.us = 1e6 * robodiff::cli::bench::secondsPerCall([&] { runner.call(name, timed); }, plan);
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
 // Pinocchio on a preallocated Data: its analytic algorithms and derivatives.
 std::vector<RowResult> runPinocchio(const pinocchio::Model& model, const State& timed,
                                     const std::vector<State>& checks, const Timing& plan);

@@ -17,7 +17,6 @@ namespace anchors {
 namespace {
 
 using robodiff::cli::bench::doNotOptimize;
-using robodiff::cli::bench::secondsPerCall;
 
 // One Euler-integrated knot, with or without the running cost.
 struct CrocoddylKnot {
@@ -97,15 +96,7 @@ struct CrocoddylRunner {
 std::vector<RowResult> runCrocoddyl(const pinocchio::Model& model, const State& timed,
                                     const std::vector<State>& checks, const Timing& plan) {
   CrocoddylRunner runner(model);
-  std::vector<RowResult> rows;
-  for (const std::string& name : kStepRows) {
-    RowResult r;
-    r.name = name;
-    for (const State& s : checks) r.outputs.push_back(runner.output(name, s));
-    r.us = 1e6 * secondsPerCall([&] { runner.call(name, timed); }, plan);
-    rows.push_back(std::move(r));
-  }
-  return rows;
+  return timeRows(runner, kStepRows, timed, checks, plan);
 }
 
 }  // namespace anchors

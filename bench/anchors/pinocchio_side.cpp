@@ -51,7 +51,6 @@ pinocchio::FrameIndex lastFrame(const pinocchio::Model& model) {
 namespace {
 
 using robodiff::cli::bench::doNotOptimize;
-using robodiff::cli::bench::secondsPerCall;
 
 // Pinocchio fills only the upper triangle of M and Minv in these algorithms.
 Eigen::MatrixXd symmetricFromUpper(const Eigen::MatrixXd& m) {
@@ -103,15 +102,7 @@ struct PinocchioRunner {
 std::vector<RowResult> runPinocchio(const pinocchio::Model& model, const State& timed,
                                     const std::vector<State>& checks, const Timing& plan) {
   PinocchioRunner runner(model);
-  std::vector<RowResult> rows;
-  for (const std::string& name : kRows) {
-    RowResult r;
-    r.name = name;
-    for (const State& s : checks) r.outputs.push_back(runner.output(name, s));
-    r.us = 1e6 * secondsPerCall([&] { runner.call(name, timed); }, plan);
-    rows.push_back(std::move(r));
-  }
-  return rows;
+  return timeRows(runner, kRows, timed, checks, plan);
 }
 
 }  // namespace anchors

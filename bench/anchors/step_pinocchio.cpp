@@ -18,7 +18,6 @@ const std::vector<std::string> kStepRows = {"euler_step_value", "euler_step_jaco
 namespace {
 
 using robodiff::cli::bench::doNotOptimize;
-using robodiff::cli::bench::secondsPerCall;
 
 constexpr double kHessianStep = 1e-5;  // central differences of the analytic gradient (a check only)
 
@@ -144,15 +143,7 @@ struct PinocchioStepRunner {
 std::vector<RowResult> runPinocchioStep(const pinocchio::Model& model, const State& timed,
                                         const std::vector<State>& checks, const Timing& plan) {
   PinocchioStepRunner runner(model);
-  std::vector<RowResult> rows;
-  for (const std::string& name : kStepRows) {
-    RowResult r;
-    r.name = name;
-    for (const State& s : checks) r.outputs.push_back(runner.output(name, s));
-    r.us = 1e6 * secondsPerCall([&] { runner.call(name, timed); }, plan);
-    rows.push_back(std::move(r));
-  }
-  return rows;
+  return timeRows(runner, kStepRows, timed, checks, plan);
 }
 
 }  // namespace anchors
