@@ -89,6 +89,7 @@ struct ShmConnection::Impl {
   struct Pending {
     const void* response = nullptr;  // the response chunk, handed over by the receive thread
     SessionPortPtr from;             // the port it came from (to release it there)
+    const SessionPort* sent_to = nullptr;  // the session the request went to
     std::atomic<bool> done{false};  // set under pending_mutex; read without it while spinning
     Status failure;                  // when done without a response
   };
@@ -148,11 +149,13 @@ struct ShmConnection::Impl {
     from.port->releaseResponse(response);
   }
 
-  void failAll(const Status& status) {
+  // Fails the calls waiting on session `only` (every call when null): a lost session must
+  // not fail a call already sent to the session that replaced it.
+  void failAll(const Status& status, const SessionPort* only = nullptr) {
     std::lock_guard lock(pending_mutex);
     bool any = false;
     for (auto& [id, p] : pending) {
-      if (p->done) continue;
+      if (p->done || (only != nullptr && p->sent_to != only)) continue;
       p->done = true;
       p->failure = status;
       any = true;
@@ -184,8 +187,10 @@ struct ShmConnection::Impl {
         std::lock_guard lock(port_mutex);
         lost = session == s && !connected(s);
       }
-      if (lost) failAll({StatusCode::Unavailable, "the robodiff server went away (iceoryx service " +
-                                                      serviceName(options.service) + " is no longer offered)"});
+      if (lost)
+        failAll({StatusCode::Unavailable,
+                 "the robodiff server went away (iceoryx service " + serviceName(options.service) + " is no longer offered)"},
+                s.get());
     }
   }
 
@@ -357,6 +362,7 @@ struct ShmConnection::Impl {
     iox::popo::RequestHeader::fromPayload(chunk)->setSequenceId(static_cast<std::int64_t>(header.correlation_id));
 
     Pending waiting;
+    waiting.sent_to = to.get();
     {
       std::lock_guard lock(pending_mutex);
       pending.emplace_back(header.correlation_id, &waiting);
