@@ -16,6 +16,7 @@
 #include "commands/commands.hpp"
 #include "output/output_table.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/entry_json.hpp"
 #include "options/cache_location.hpp"
 #include "output/human_units.hpp"
 
@@ -55,33 +56,6 @@ std::int64_t nowSeconds() {
 
 std::string keyPrefix(const std::string& key) { return key.substr(0, 12); }
 
-// A JSON text from the index as JSON (a string when it does not parse).
-json embedded(const std::string& text) {
-  if (text.empty()) return nullptr;
-  json parsed = json::parse(text, nullptr, false);
-  return parsed.is_discarded() ? json(text) : parsed;
-}
-
-json entryJson(const cache::Entry& e) {
-  return {{"key", e.key},
-          {"robot", e.info.robot},
-          {"function", e.info.function},
-          {"state", e.state},
-          {"model_hash", e.info.model_hash},
-          {"spec", embedded(e.info.spec)},
-          {"sizes", embedded(e.info.sizes)},
-          {"compiler", e.info.compiler},
-          {"build_seconds", e.info.build_seconds},
-          {"library_bytes", e.library_bytes},
-          {"total_bytes", e.total_bytes},
-          {"library_sha256", e.library_sha256},
-          {"created", e.created},
-          {"last_used", e.last_used},
-          {"hits", e.hits},
-          {"owner", e.owner},
-          {"lease_expires_ms", e.lease_expires_ms}};
-}
-
 std::map<std::string, cache::Entry> entriesByKey(cache::Cache& cache) {
   std::map<std::string, cache::Entry> entries;
   for (cache::Entry& e : cache.list()) entries.emplace(e.key, std::move(e));
@@ -95,7 +69,7 @@ void listEntries(const CacheArgs& args) {
   const std::vector<cache::Entry> entries = cache ? cache->list() : std::vector<cache::Entry>{};
   if (args.json) {
     json rows = json::array();
-    for (const cache::Entry& e : entries) rows.push_back(entryJson(e));
+    for (const cache::Entry& e : entries) rows.push_back(robodiff::cache::entryJson(e));
     std::cout << rows.dump(2) << "\n";
     return;
   }

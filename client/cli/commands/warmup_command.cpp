@@ -7,7 +7,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -15,8 +14,8 @@
 
 #include "commands/commands.hpp"
 #include "robodiff/cache/cache.hpp"
-#include "robodiff/functions/function_spec.hpp"
 #include "robodiff/workers/cached_builder.hpp"
+#include "robodiff/workers/warmup_targets.hpp"
 #include "robodiff/workers/worker_pool.hpp"
 #include "options/cache_location.hpp"
 #include "output/human_units.hpp"
@@ -26,8 +25,6 @@
 
 namespace robodiff::cli {
 namespace {
-
-namespace fs = std::filesystem;
 
 unsigned defaultJobs() { return std::clamp(std::thread::hardware_concurrency(), 1u, 2u); }
 
@@ -42,40 +39,20 @@ struct WarmupArgs {
   std::string server;      // its value; empty: $ROBODIFF_SERVER, else auto
 };
 
-// Problems a person fixes on the command line are reported before anything is built:
-// missing files and specs that do not parse. A URDF that does not load is a failed
-// target (the builder says why), like any other build failure.
-void checkInputs(const WarmupArgs& args) {
-  for (const std::string& urdf : args.urdfs)
-    if (!fs::is_regular_file(urdf)) throw std::runtime_error("--urdf " + urdf + ": no such file");
-  for (const std::string& spec : args.specs) {
-    if (!fs::is_regular_file(spec)) throw std::runtime_error("--spec " + spec + ": no such file");
-    loadFunctionSpec(spec);  // throws SpecError naming the file, the field and the value
-  }
-}
-
-// The cross product, robot-major; a pair named twice is built once.
+// The files named on the command line, checked (missing files and specs that do not
+// parse are reported before anything is built) and paired (warmup_targets.hpp).
 std::vector<workers::BuildTarget> targetsOf(const WarmupArgs& args) {
-  std::vector<workers::BuildTarget> targets;
-  std::set<std::pair<fs::path, fs::path>> seen;
-  for (const std::string& urdf : args.urdfs)
-    for (const std::string& spec : args.specs) {
-      if (!seen.emplace(fs::weakly_canonical(urdf), fs::weakly_canonical(spec)).second) continue;
-      workers::BuildTarget target;
-      target.urdf_path = urdf;
-      target.floating_base = args.floating_base;
-      target.spec_path = spec;
-      targets.push_back(std::move(target));
-    }
-  return targets;
+  const workers::WarmupRequest request{args.urdfs, args.specs, args.floating_base};
+  workers::checkWarmupInputs(request, "--urdf", "--spec");
+  return workers::warmupTargets(request);
 }
 
 cache::Cache openCache(const WarmupArgs& args) { return openCliCache(cacheDirFor(args.cache_dir), args.budget, true); }
 
 void warmup(const WarmupArgs& args) {
-  checkInputs(args);
+  const std::vector<workers::BuildTarget> targets = targetsOf(args);
   if (args.on_server) {
-    warmupOnServer(targetsOf(args), {args.server, args.timeout_seconds, args.json});
+    warmupOnServer(targets, {args.server, args.timeout_seconds, args.json});
     return;
   }
   cache::Cache cache = openCache(args);
@@ -92,7 +69,6 @@ void warmup(const WarmupArgs& args) {
   workers::WorkerPool pool(pool_options);
   workers::CachedBuilder builder(cache, pool, builder_options);
 
-  const std::vector<workers::BuildTarget> targets = targetsOf(args);
   std::vector<std::string> spec_paths;
   for (const workers::BuildTarget& t : targets) spec_paths.push_back(t.spec_path);
   WarmupProgress progress(chooseProgressStyle(args.json), std::cout, spec_paths, args.jobs);

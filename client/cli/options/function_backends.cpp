@@ -8,6 +8,7 @@
 
 #include "robodiff/functions/evaluation.hpp"
 #include "robodiff/functions/reference.hpp"
+#include "robodiff/functions/spec_check.hpp"
 
 namespace robodiff::cli {
 
@@ -92,28 +93,14 @@ SpecFunction::SpecFunction(const Model& model, FunctionSpec spec, const std::vec
 }
 
 std::vector<Eigen::VectorXd> SpecFunction::allInputs(const std::vector<Eigen::VectorXd>& runtime) const {
-  std::vector<Eigen::VectorXd> variable;
-  for (std::size_t b = 0; b < definition().inputs.size(); ++b)
-    if (definition().inputs[b].name != "weights") variable.push_back(runtime.at(b));
-  return completeInputs(spec_, variable);
+  return specAllInputs(spec_, built_, runtime);
 }
 
 Eigen::VectorXd SpecFunction::hessianWeights(std::size_t k, const std::vector<Eigen::VectorXd>& runtime) const {
-  const OutputSpec& o = spec_.outputs.at(k);
-  if (o.fixed_weights)
-    return Eigen::Map<const Eigen::VectorXd>(o.fixed_weights->data(),
-                                             static_cast<Eigen::Index>(o.fixed_weights->size()));
-  for (std::size_t b = 0; b < definition().inputs.size(); ++b)
-    if (definition().inputs[b].name == "weights") return runtime.at(b);
-  throw std::logic_error("hessianWeights: output " + std::to_string(k) + " takes no weights");
+  return specHessianWeights(spec_, built_, k, runtime);
 }
 
-Eigen::MatrixXd SpecFunction::valueMatrix(const Eigen::VectorXd& flat) const {
-  Eigen::MatrixXd m(built_.value_rows, built_.value_cols);
-  for (Eigen::Index r = 0, i = 0; r < m.rows(); ++r)
-    for (Eigen::Index c = 0; c < m.cols(); ++c) m(r, c) = flat[i++];
-  return m;
-}
+Eigen::MatrixXd SpecFunction::valueMatrix(const Eigen::VectorXd& flat) const { return specValueMatrix(built_, flat); }
 
 std::vector<Eigen::MatrixXd> SpecFunction::evaluate(Backend backend,
                                                     const std::vector<Eigen::VectorXd>& runtime) const {
@@ -130,10 +117,7 @@ std::vector<Eigen::MatrixXd> SpecFunction::evaluate(Backend backend,
       blocks = evaluateBlocks(*compiled_, definition(), runtime);
       break;
   }
-  std::vector<Eigen::MatrixXd> out;
-  for (std::size_t k = 0; k < blocks.size(); ++k)
-    out.push_back(blockMatrix(definition().outputs[k], blocks[k], spec_.outputs[k].kind == OutputKind::Hessian));
-  return out;
+  return specBlockMatrices(spec_, built_, blocks);
 }
 
 std::vector<Eigen::MatrixXd> SpecFunction::evaluateReference(const std::vector<Eigen::VectorXd>& runtime) const {

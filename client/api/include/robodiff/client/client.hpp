@@ -162,6 +162,15 @@ class Client {
   rpc::HealthReply health();                      // from the server; throws without one
   std::vector<rpc::FunctionSummary> functions();  // ListFunctions
 
+  // Batch jobs, run by the server in its worker processes (client/api/src/jobs.cpp; the
+  // kinds and their parameters: schema/README.md). Need a server; throw ClientError
+  // (INVALID_ARGUMENT for bad parameters, NOT_FOUND for an unknown job, UNAVAILABLE).
+  std::string submitJob(const std::string& kind, const std::string& params_json);  // the job's id
+  std::vector<rpc::JobInfo> jobs();                      // every job the server knows
+  rpc::JobInfo jobStatus(const std::string& job_id);
+  rpc::JobState cancelJob(const std::string& job_id);    // the state after the cancel
+  rpc::JobResultReply jobResult(const std::string& job_id);  // a finished job's summary and files
+
   struct Impl;
 
  private:
