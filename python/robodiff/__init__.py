@@ -12,5 +12,12 @@ The reference is docs/python.md.
 from .errors import Error
 from ._robodiff import Function
 from .client import Client, Model
+from .jobs import JobInfo, JobResult
+from .warmup import WarmupResult, WarmupSummary, warmup
+from . import cache
+from . import reference
+from .spec_check import CheckComparison, CheckResult, check
 
-__all__ = ["Client", "Error", "Function", "Model"]
+__all__ = ["Client", "Error", "Function", "Model", "JobInfo", "JobResult", "WarmupResult", "WarmupSummary",
+           "cache", "warmup"]
+__all__ += ["CheckComparison", "CheckResult", "check", "reference"]

@@ -12,6 +12,7 @@ from typing import Any, Mapping, Optional, Union
 
 from . import _robodiff
 from ._robodiff import Function
+from .jobs import JobsMixin
 
 PathOrText = Union[str, "os.PathLike[str]"]
 
@@ -23,9 +24,13 @@ def _looks_like_text(value: PathOrText, marker: str) -> bool:
 class Model:
     """A robot loaded by a Client: sizes, names, and ``function(spec)``."""
 
-    def __init__(self, client: "Client", info: "_robodiff.ModelInfo") -> None:
+    def __init__(self, client: "Client", info: "_robodiff.ModelInfo", urdf: Optional[PathOrText] = None,
+                 floating_base: bool = False) -> None:
         self._client = client
         self._info = info
+        self._urdf = urdf  # the URDF text or path it was loaded from (for the reference)
+        self._floating_base = floating_base
+        self._reference: Optional["_robodiff.ReferenceModel"] = None
 
     @property
     def id(self) -> str:
@@ -69,11 +74,23 @@ class Model:
             return native.function_file(self._info, os.fspath(spec))
         raise TypeError(f"spec: {type(spec).__name__} given; a dict, a JSON string or a path is needed")
 
+    def _reference_model(self) -> "_robodiff.ReferenceModel":
+        """The robot parsed in this process (robodiff.reference, robodiff.check), parsed once."""
+        if self._reference is None:
+            if self._urdf is None:
+                raise ValueError("this Model was not loaded by Client.load: no URDF to parse for the reference")
+            text = self._urdf
+            if not _looks_like_text(text, "<robot"):
+                with open(os.fspath(text), "rb") as file:  # the bytes Client.load read
+                    text = file.read().decode("utf-8")
+            self._reference = _robodiff.ReferenceModel(text, self._floating_base, self.id)
+        return self._reference
+
     def __repr__(self) -> str:
         return f"<robodiff.Model {self.id[:12]} nq={self.nq} nv={self.nv}>"
 
 
-class Client:
+class Client(JobsMixin):
     """A connection to robodiff, mirroring the C++ ``robodiff::client::Client``.
 
     server: None reads ``$ROBODIFF_SERVER`` (unset: ``"auto"``); ``"auto"`` uses the cached
@@ -102,8 +119,9 @@ class Client:
         robodiff.Error (INVALID_ARGUMENT naming the URDF's problem, UNAVAILABLE, ...).
         """
         if _looks_like_text(urdf, "<robot"):
-            return Model(self, self._native.load_model(urdf, floating_base))
-        return Model(self, self._native.load_model_file(os.fspath(urdf), floating_base))
+            return Model(self, self._native.load_model(urdf, floating_base), urdf, floating_base)
+        path = os.fspath(urdf)
+        return Model(self, self._native.load_model_file(path, floating_base), os.path.abspath(path), floating_base)
 
     def __repr__(self) -> str:
         return f"<robodiff.Client mode={self.mode}>"
