@@ -18,6 +18,7 @@ PACKAGES=(
   clang tcc
   chromium chromium-driver  # the dashboard's test runs the page in headless Chromium
   python3-venv python3-dev  # the Python module: build/venv (python/setup-venv.sh) and Python's headers
+  python3-matplotlib  # examples/python/plot_torques.py's PNG (optional for users; its test runs it)
 )
 
 missing=()
