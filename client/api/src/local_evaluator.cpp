@@ -64,6 +64,25 @@ void LocalEvaluator::evaluateBatch(std::uint64_t knots, const double* in, double
     evaluateChunk(std::min(chunk_knots_, knots - first), in + first * in_count_, out + first * out_count_, t);
 }
 
+void LocalEvaluator::evaluateBlocks(std::uint64_t knots, const double* const* in, double* const* out,
+                                    bool batch) const noexcept {
+  ThreadBuffers& t = threadBuffers();
+  t.reserveFor(std::max(work_size_, batch_work_size_), in_offsets_.size(), out_offsets_.size());
+  if (!batch) {
+    eval_(in, out, t.work.data());
+  } else if (width_ > 1) {
+    eval_batch_(knots, in, out, t.work.data());
+  } else {  // a plain loop: point at each knot in turn
+    const double** ip = t.in.data();
+    double** op = t.out.data();
+    for (std::uint64_t k = 0; k < knots; ++k) {
+      for (std::size_t b = 0; b < in_offsets_.size(); ++b) ip[b] = in[b] + k * in_sizes_[b];
+      for (std::size_t b = 0; b < out_offsets_.size(); ++b) op[b] = out[b] + k * out_sizes_[b];
+      eval_(ip, op, t.work.data());
+    }
+  }
+}
+
 // n knots: regroup the inputs (one block: knot after knot already is block after block),
 // one batched call, the outputs back knot after knot.
 void LocalEvaluator::evaluateChunk(std::uint64_t n, const double* in, double* out, ThreadBuffers& t) const noexcept {

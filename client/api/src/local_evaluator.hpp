@@ -51,6 +51,11 @@ class LocalEvaluator {
   // whole chunk, whatever `knots`).
   void evaluateBatch(std::uint64_t knots, const double* in, double* out) const noexcept;
 
+  // The same two with each block in its own memory, knot after knot (block b of knot k
+  // at in[b] + k * size_b): the library's own batched layout, so nothing is copied. One
+  // knot (batch false) goes to the single entry point, else `knots` to the batched one.
+  void evaluateBlocks(std::uint64_t knots, const double* const* in, double* const* out, bool batch) const noexcept;
+
   // Knots the batched entry point evaluates together (1: it is not used).
   std::uint32_t batchWidth() const { return width_; }
 

@@ -112,6 +112,14 @@ class Function {
   // and bit-identical to the server's EvaluateBatch on the same library.
   Status evaluateBatch(std::size_t knots, std::span<const double> inputs, std::span<double> outputs,
                        std::chrono::nanoseconds timeout = std::chrono::nanoseconds(0)) const;
+  // knots with each block in its own memory, knot after knot (input block b of knot k at
+  // inputs[b] + k * size_b; outputs alike): one array per block, as numpy holds them.
+  // Local: handed to the library as they are (its own batched layout), nothing copied;
+  // a server: packed knot after knot and sent as evaluate/evaluateBatch would. batch
+  // false evaluates one knot (evaluate's path), true `knots` (evaluateBatch's). The
+  // caller guarantees the block counts and sizes.
+  Status evaluateBlocks(std::size_t knots, std::span<const double* const> inputs, std::span<double* const> outputs,
+                        bool batch) const;
   // The same, returning at once; the spans must stay valid until the future is ready.
   // Runs on the Client's async threads (ClientOptions::async_threads, started by the
   // first call); allocates nothing after that thread's first call on this Function. More
