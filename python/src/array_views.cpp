@@ -1,6 +1,8 @@
 // Checking a Python buffer as C-contiguous float64 with messages a user can act on.
 #include "array_views.hpp"
 
+#include "numpy_api.hpp"
+
 #include <nanobind/stl/string.h>
 
 #include <cstring>
@@ -60,6 +62,25 @@ std::string argumentLabel(const std::string& name, bool output) {
 }
 
 DoubleArrayView::DoubleArrayView(nb::handle object, const std::string& name, bool writable) {
+  if (!viewNumpyArray(object, writable)) viewBuffer(object, name, writable);
+}
+
+// A float64, C-contiguous, aligned, native-order numpy array (writable when asked): its
+// fields read directly, no buffer export (which costs numpy a format string per call).
+bool DoubleArrayView::viewNumpyArray(nb::handle object, bool writable) {
+  if (!PyArray_Check(object.ptr())) return false;
+  auto* array = reinterpret_cast<PyArrayObject*>(object.ptr());
+  if (PyArray_TYPE(array) != NPY_DOUBLE || !PyArray_ISCARRAY_RO(array) || !PyArray_ISNOTSWAPPED(array) ||
+      (writable && !PyArray_ISWRITEABLE(array)))
+    return false;  // the buffer path says what is wrong
+  data_ = static_cast<double*>(PyArray_DATA(array));
+  ndim_ = PyArray_NDIM(array);
+  shape_ = reinterpret_cast<const Py_ssize_t*>(PyArray_DIMS(array));
+  size_ = static_cast<std::size_t>(PyArray_SIZE(array));
+  return true;
+}
+
+void DoubleArrayView::viewBuffer(nb::handle object, const std::string& name, bool writable) {
   const char* needed = "a C-contiguous numpy.ndarray of float64";
   if (PyObject_GetBuffer(object.ptr(), &view_, PyBUF_RECORDS_RO) != 0) {
     PyErr_Clear();
@@ -68,6 +89,10 @@ DoubleArrayView::DoubleArrayView(nb::handle object, const std::string& name, boo
   }
   const bool fits = isNativeDouble(view_.format) && view_.itemsize == sizeof(double) &&
                     PyBuffer_IsContiguous(&view_, 'C') && !(writable && view_.readonly);
+  data_ = static_cast<double*>(view_.buf);
+  ndim_ = view_.ndim;
+  shape_ = view_.shape;
+  size_ = static_cast<std::size_t>(view_.len) / sizeof(double);
   if (fits) [[likely]] {
     held_ = true;
     return;
@@ -90,11 +115,20 @@ DoubleArrayView::DoubleArrayView(nb::handle object, const std::string& name, boo
 }
 
 DoubleArrayView::DoubleArrayView(DoubleArrayView&& other) noexcept
-    : view_(other.view_), held_(std::exchange(other.held_, false)) {}
+    : data_(other.data_),
+      ndim_(other.ndim_),
+      shape_(other.shape_),
+      size_(other.size_),
+      view_(other.view_),
+      held_(std::exchange(other.held_, false)) {}
 
 DoubleArrayView& DoubleArrayView::operator=(DoubleArrayView&& other) noexcept {
   if (this != &other) {
     if (held_) PyBuffer_Release(&view_);
+    data_ = other.data_;
+    ndim_ = other.ndim_;
+    shape_ = other.shape_;
+    size_ = other.size_;
     view_ = other.view_;
     held_ = std::exchange(other.held_, false);
   }
@@ -107,8 +141,8 @@ DoubleArrayView::~DoubleArrayView() {
 
 std::string DoubleArrayView::shapeText() const {
   std::string text = "(";
-  for (int i = 0; i < view_.ndim; ++i) text += (i ? ", " : "") + std::to_string(view_.shape[i]);
-  return text + (view_.ndim == 1 ? ",)" : ")");
+  for (int i = 0; i < ndim_; ++i) text += (i ? ", " : "") + std::to_string(shape_[i]);
+  return text + (ndim_ == 1 ? ",)" : ")");
 }
 
 }  // namespace robodiff::python

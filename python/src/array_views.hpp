@@ -23,14 +23,23 @@ class DoubleArrayView {
   DoubleArrayView& operator=(const DoubleArrayView&) = delete;
   ~DoubleArrayView();
 
-  int ndim() const { return view_.ndim; }
-  std::size_t dim(int i) const { return static_cast<std::size_t>(view_.shape[i]); }
-  double* data() const { return static_cast<double*>(view_.buf); }
-  std::size_t size() const { return static_cast<std::size_t>(view_.len) / sizeof(double); }
+  int ndim() const { return ndim_; }
+  std::size_t dim(int i) const { return static_cast<std::size_t>(shape_[i]); }
+  double* data() const { return data_; }
+  std::size_t size() const { return size_; }
   // "(7,)", "(20, 7)": the shape as numpy prints it.
   std::string shapeText() const;
 
  private:
+  bool viewNumpyArray(nanobind::handle object, bool writable);
+  void viewBuffer(nanobind::handle object, const std::string& name, bool writable);
+
+  // What is viewed: a numpy array's own fields (the fast path: the caller keeps the array
+  // alive), or the buffer protocol's view of anything else, held until destruction.
+  double* data_ = nullptr;
+  int ndim_ = 0;
+  const Py_ssize_t* shape_ = nullptr;
+  std::size_t size_ = 0;
   Py_buffer view_{};
   bool held_ = false;
 };

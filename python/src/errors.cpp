@@ -33,6 +33,25 @@ void raiseStatus(const Status& status) {
   throw nb::python_error();
 }
 
+void setErrorFromCurrentException() noexcept {
+  try {
+    throw;
+  } catch (nb::python_error& e) {
+    e.restore();
+  } catch (const nb::builtin_exception& e) {
+    PyObject* type = e.type() == nb::exception_type::type_error    ? PyExc_TypeError
+                     : e.type() == nb::exception_type::value_error ? PyExc_ValueError
+                                                                   : PyExc_RuntimeError;
+    PyErr_SetString(type, e.what());
+  } catch (const client::ClientError& e) {
+    setErrorFrom(e.status());
+  } catch (const std::exception& e) {
+    PyErr_SetString(PyExc_RuntimeError, e.what());
+  } catch (...) {
+    PyErr_SetString(PyExc_RuntimeError, "unknown C++ exception");
+  }
+}
+
 void registerErrorTranslator() {
   errorType();  // imported now, while the module loads
   nb::register_exception_translator([](const std::exception_ptr& p, void*) {

@@ -14,4 +14,8 @@ namespace robodiff::python {
 // Translates client::ClientError thrown inside any binding into robodiff.Error.
 void registerErrorTranslator();
 
+// Inside a raw CPython slot (no nanobind dispatch around it): sets the Python error the
+// exception being handled stands for, as nanobind's dispatch would. Call from a catch.
+void setErrorFromCurrentException() noexcept;
+
 }  // namespace robodiff::python

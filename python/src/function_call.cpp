@@ -1,15 +1,17 @@
-// Evaluating a Function from Python: keyword arrays checked (never converted), packed
-// into one knot-major buffer per thread, evaluated without the GIL, and the outputs
-// written into new numpy arrays or the caller's out= arrays.
+// Evaluating a Function from Python: keyword arrays checked (never converted), handed
+// to the C++ Function where they are (one array per block, knot after knot), evaluated
+// without the GIL straight into new numpy arrays or the caller's out= arrays.
 #include "function_call.hpp"
 
 #include <algorithm>
 #include <cstring>
+#include <memory_resource>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
 
 #include "array_views.hpp"
 #include "errors.hpp"
+#include "numpy_api.hpp"
 #include "robodiff/language/suggest.hpp"
 
 namespace nb = nanobind;
@@ -17,24 +19,21 @@ namespace nb = nanobind;
 namespace robodiff::python {
 namespace {
 
-// numpy.empty, looked up once (kept for the process: never released after the interpreter).
-PyObject* numpyEmpty() {
-  static PyObject* empty = nb::object(nb::module_::import_("numpy").attr("empty")).release().ptr();
-  return empty;
-}
+// An array's shape, at most (knots, rows, cols): fixed size, so never allocated.
+struct ArrayShape {
+  std::size_t dims[3] = {};
+  std::size_t size = 0;
+  void push(std::size_t d) { dims[size++] = d; }
+};
 
-// A new C-contiguous float64 numpy array of `shape` (numpy.empty: numpy owns it), and
-// where its values are.
-nb::object newDoubleArray(const std::vector<std::size_t>& shape, double** data) {
-  nb::object dims = nb::steal(PyTuple_New(static_cast<Py_ssize_t>(shape.size())));
-  for (std::size_t i = 0; i < shape.size(); ++i)
-    PyTuple_SET_ITEM(dims.ptr(), static_cast<Py_ssize_t>(i), PyLong_FromSize_t(shape[i]));
-  nb::object array = nb::steal(PyObject_CallOneArg(numpyEmpty(), dims.ptr()));  // float64, C order
+// A new C-contiguous float64 numpy array of `shape` (numpy owns its memory), and where
+// its values are.
+nb::object newDoubleArray(const ArrayShape& shape, double** data) {
+  npy_intp dims[3];
+  for (std::size_t i = 0; i < shape.size; ++i) dims[i] = static_cast<npy_intp>(shape.dims[i]);
+  nb::object array = nb::steal(PyArray_SimpleNew(static_cast<int>(shape.size), dims, NPY_DOUBLE));
   if (!array.is_valid()) throw nb::python_error();
-  Py_buffer view;
-  if (PyObject_GetBuffer(array.ptr(), &view, PyBUF_SIMPLE | PyBUF_WRITABLE) != 0) throw nb::python_error();
-  *data = static_cast<double*>(view.buf);
-  PyBuffer_Release(&view);  // numpy's memory stays with the array, which we hold
+  *data = static_cast<double*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(array.ptr())));
   return array;
 }
 
@@ -57,28 +56,28 @@ nb::object importCsrMatrix() {
 
 // The array shape one output has: (rows,) for a value vector, (rows, cols), (nnz,) for
 // a sparse block's values; with a leading knot axis in a batch.
-std::vector<std::size_t> arrayShape(const OutputShape& o, bool batch, std::size_t knots) {
-  std::vector<std::size_t> shape;
-  if (batch) shape.push_back(knots);
+ArrayShape arrayShape(const OutputShape& o, bool batch, std::size_t knots) {
+  ArrayShape shape;
+  if (batch) shape.push(knots);
   if (o.sparse || o.vector) {
-    shape.push_back(o.values);
+    shape.push(o.values);
   } else {
-    shape.push_back(o.rows);
-    shape.push_back(o.cols);
+    shape.push(o.rows);
+    shape.push(o.cols);
   }
   return shape;
 }
 
-std::string shapeOf(const std::vector<std::size_t>& shape) {
+std::string shapeOf(const ArrayShape& shape) {
   std::string text = "(";
-  for (std::size_t i = 0; i < shape.size(); ++i) text += (i ? ", " : "") + std::to_string(shape[i]);
-  return text + (shape.size() == 1 ? ",)" : ")");
+  for (std::size_t i = 0; i < shape.size; ++i) text += (i ? ", " : "") + std::to_string(shape.dims[i]);
+  return text + (shape.size == 1 ? ",)" : ")");
 }
 
-bool hasShape(const DoubleArrayView& view, const std::vector<std::size_t>& shape) {
-  if (view.ndim() != static_cast<int>(shape.size())) return false;
-  for (std::size_t i = 0; i < shape.size(); ++i)
-    if (view.dim(static_cast<int>(i)) != shape[i]) return false;
+bool hasShape(const DoubleArrayView& view, const ArrayShape& shape) {
+  if (view.ndim() != static_cast<int>(shape.size)) return false;
+  for (std::size_t i = 0; i < shape.size; ++i)
+    if (view.dim(static_cast<int>(i)) != shape.dims[i]) return false;
   return true;
 }
 
@@ -91,15 +90,22 @@ std::string suggestion(const std::string& given, const std::vector<std::string>&
 
 }  // namespace
 
+// One call's arguments and output arrays, in memory from the call's stack (a call
+// allocates nothing on the heap for them).
 struct PyFunction::Arguments {
-  std::vector<DoubleArrayView> inputs;     // in input order
-  std::vector<nb::handle> out_objects;     // per output: the caller's array, or null
-  std::vector<DoubleArrayView> out_views;  // per output (empty views where not given)
+  explicit Arguments(std::pmr::memory_resource* memory)
+      : inputs(memory), out_objects(memory), out_views(memory), arrays(memory), targets(memory) {}
+  std::pmr::vector<DoubleArrayView> inputs;     // in input order
+  std::pmr::vector<nb::handle> out_objects;     // per output: the caller's array, or null
+  std::pmr::vector<DoubleArrayView> out_views;  // per output (empty views where not given)
+  std::pmr::vector<nb::object> arrays;          // per output: what the call returns
+  std::pmr::vector<double*> targets;            // per output: where its values go
   std::size_t knots = 1;
   bool batch = false;
 };
 
 PyFunction::PyFunction(client::Function function) : function_(std::move(function)) {
+  out_key_ = nb::steal(PyUnicode_InternFromString("out"));
   const rpc::GetFunctionReply& layout = function_.layout();
   for (const rpc::InputBlock& b : layout.inputs) {
     input_names_.push_back(b.name);
@@ -184,11 +190,11 @@ void PyFunction::parseOut(nb::handle out, Arguments& args) const {
                              .c_str());
   std::size_t found = 0;
   for (std::size_t j = 0; j < outputs_.size(); ++j) {
-    PyObject* given = PyDict_GetItem(out.ptr(), output_keys_[j].ptr());
+    PyObject* given = PyDict_GetItemWithError(out.ptr(), output_keys_[j].ptr());  // str keys: never an error
     if (given == nullptr) continue;
     ++found;
     DoubleArrayView view(given, outputs_[j].name, true);
-    const std::vector<std::size_t> shape = arrayShape(outputs_[j], args.batch, args.knots);
+    const ArrayShape shape = arrayShape(outputs_[j], args.batch, args.knots);
     if (!hasShape(view, shape))
       throw nb::value_error((argumentLabel(outputs_[j].name, true) + ": shape " + view.shapeText() + " given; " + shapeOf(shape) + " is needed" +
                              (outputs_[j].sparse ? " (a sparse output's nnz values, in CSR order)" : ""))
@@ -206,20 +212,18 @@ void PyFunction::parseOut(nb::handle out, Arguments& args) const {
   }
 }
 
-PyFunction::Arguments PyFunction::parse(nb::kwargs kwargs) const {
+void PyFunction::parse(nb::kwargs kwargs, Arguments& args) const {
   PyObject* kw = kwargs.ptr();
-  PyObject* out = PyDict_GetItemString(kw, "out");  // borrowed
+  PyObject* out = PyDict_GetItemWithError(kw, out_key_.ptr());  // borrowed
   if (static_cast<std::size_t>(PyDict_Size(kw)) != input_names_.size() + (out ? 1 : 0)) refuseNames(kwargs);
-  Arguments args;
   args.inputs.reserve(input_names_.size());
   for (std::size_t i = 0; i < input_names_.size(); ++i) {
-    PyObject* given = PyDict_GetItem(kw, input_keys_[i].ptr());  // borrowed
+    PyObject* given = PyDict_GetItemWithError(kw, input_keys_[i].ptr());  // borrowed
     if (given == nullptr) refuseNames(kwargs);
     args.inputs.emplace_back(given, input_names_[i], false);
   }
   checkInputShapes(args);
   parseOut(out, args);
-  return args;
 }
 
 nb::object PyFunction::sparseResult(std::size_t block, nb::object data, bool batch) const {
@@ -230,42 +234,42 @@ nb::object PyFunction::sparseResult(std::size_t block, nb::object data, bool bat
                      nb::arg("copy") = false);
 }
 
-nb::dict PyFunction::call(nb::kwargs kwargs) const {
-  const Arguments args = parse(kwargs);
-  const std::size_t in_count = function_.inputCount(), out_count = function_.outputCount();
-  thread_local std::vector<double> in_buffer, out_buffer;  // no allocation after a thread's largest call
-  in_buffer.resize(args.knots * in_count);
-  out_buffer.resize(args.knots * out_count);
-  std::size_t in_offset = 0;
-  for (std::size_t i = 0; i < args.inputs.size(); ++i) {
-    const std::size_t n = input_sizes_[i];
-    for (std::size_t k = 0; k < args.knots; ++k)
-      std::memcpy(in_buffer.data() + k * in_count + in_offset, args.inputs[i].data() + k * n, n * sizeof(double));
-    in_offset += n;
+// The output arrays a call writes: the caller's out= arrays, else new ones.
+void PyFunction::outputArrays(Arguments& args) const {
+  args.arrays.resize(outputs_.size());
+  args.targets.resize(outputs_.size());
+  for (std::size_t j = 0; j < outputs_.size(); ++j) {
+    if (args.out_objects[j].is_valid()) {
+      args.arrays[j] = nb::borrow(args.out_objects[j]);
+      args.targets[j] = args.out_views[j].data();
+    } else {
+      args.arrays[j] = newDoubleArray(arrayShape(outputs_[j], args.batch, args.knots), &args.targets[j]);
+    }
   }
+}
+
+nb::dict PyFunction::call(nb::kwargs kwargs) const {
+  std::byte stack[2048];
+  std::pmr::monotonic_buffer_resource memory(stack, sizeof stack);
+  Arguments args(&memory);
+  parse(kwargs, args);
+  outputArrays(args);
+  // Each array is one block, knot after knot: the library's own layout, so in process
+  // the arrays are evaluated where they are (client::Function::evaluateBlocks).
+  std::pmr::vector<const double*> inputs(&memory);
+  for (const DoubleArrayView& view : args.inputs) inputs.push_back(view.data());
   if (args.knots > 0) {
     Status status;
     {
       nb::gil_scoped_release release;
-      status = args.batch ? function_.evaluateBatch(args.knots, in_buffer, out_buffer)
-                          : function_.evaluate(in_buffer, out_buffer);
+      status = function_.evaluateBlocks(args.knots, inputs, args.targets, args.batch);
     }
     if (!status.ok()) raiseStatus(status);
   }
   nb::dict result;
   for (std::size_t j = 0; j < outputs_.size(); ++j) {
-    const OutputShape& o = outputs_[j];
-    nb::object array;
-    double* target = nullptr;
-    if (args.out_objects[j].is_valid()) {
-      array = nb::borrow(args.out_objects[j]);
-      target = args.out_views[j].data();
-    } else {
-      array = newDoubleArray(arrayShape(o, args.batch, args.knots), &target);
-    }
-    for (std::size_t k = 0; k < args.knots; ++k)
-      std::memcpy(target + k * o.values, out_buffer.data() + k * out_count + o.offset, o.values * sizeof(double));
-    PyDict_SetItem(result.ptr(), output_keys_[j].ptr(), o.sparse ? sparseResult(j, array, args.batch).ptr() : array.ptr());
+    nb::object value = outputs_[j].sparse ? sparseResult(j, args.arrays[j], args.batch) : std::move(args.arrays[j]);
+    PyDict_SetItem(result.ptr(), output_keys_[j].ptr(), value.ptr());
   }
   return result;
 }

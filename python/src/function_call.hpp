@@ -40,10 +40,12 @@ class PyFunction {
 
  private:
   struct Arguments;
-  Arguments parse(nanobind::kwargs kwargs) const;
+  void parse(nanobind::kwargs kwargs, Arguments& args) const;
   void checkInputShapes(Arguments& args) const;
   void parseOut(nanobind::handle out, Arguments& args) const;
   nanobind::object sparseResult(std::size_t block, nanobind::object data, bool batch) const;
+  void outputArrays(Arguments& args) const;
+
   [[noreturn]] void refuseNames(nanobind::kwargs kwargs) const;
 
   client::Function function_;
@@ -53,7 +55,8 @@ class PyFunction {
   std::vector<std::string> output_names_;
   std::vector<nanobind::object> input_keys_, output_keys_;  // the names as Python str, for dict look-ups
   std::vector<nanobind::object> csr_indices_, csr_indptr_;  // per output; None when dense
-  nanobind::object csr_matrix_;  // scipy.sparse.csr_matrix, or None without scipy
+  nanobind::object csr_matrix_;
+  nanobind::object out_key_;  // "out", interned  // scipy.sparse.csr_matrix, or None without scipy
 };
 
 }  // namespace robodiff::python

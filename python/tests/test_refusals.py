@@ -48,6 +48,16 @@ def test_an_unknown_input_name_suggests_the_closest(rnea):
         rnea(qq=np.zeros(7), v=np.zeros(7), a=np.zeros(7))
 
 
+def test_positional_inputs_are_refused_by_name(rnea):
+    with pytest.raises(TypeError, match=r"robodiff.Function takes its inputs by name: fn\(q=..., v=..., ...\)"):
+        rnea(np.zeros(7), np.zeros(7), np.zeros(7))
+
+
+def test_no_inputs_at_all_names_them(rnea):
+    with pytest.raises(TypeError, match=r"the inputs are q \(7,\), v \(7,\), a \(7,\)"):
+        rnea()
+
+
 def test_a_missing_input_is_named(rnea):
     with pytest.raises(TypeError, match=r"missing input 'a'; the inputs are q \(7,\), v \(7,\), a \(7,\)"):
         rnea(q=np.zeros(7), v=np.zeros(7))
