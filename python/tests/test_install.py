@@ -24,3 +24,20 @@ def test_the_build_venv_imports_the_build_trees_module_without_pythonpath(tmp_pa
     package, module = (pathlib.Path(line).resolve() for line in done.stdout.split())
     assert package.parent == (REPO / "build" / "python" / "robodiff").resolve()
     assert module.parent == package.parent and module.suffix == ".so"
+
+
+def test_the_type_stubs_describe_the_module():
+    """_robodiff.pyi (nanobind's stubgen at build time) parses and names what the module
+    offers, with Function's call as users write it (stub_patterns.txt)."""
+    import ast
+
+    import robodiff._robodiff as native
+
+    stub = pathlib.Path(native.__file__).with_name("_robodiff.pyi")
+    tree = ast.parse(stub.read_text())
+    classes = {node.name: node for node in tree.body if isinstance(node, ast.ClassDef)}
+    for name in ("Client", "Function", "ModelInfo"):
+        assert name in classes and hasattr(native, name)
+    call = next(f for f in classes["Function"].body if isinstance(f, ast.FunctionDef) and f.name == "__call__")
+    assert [a.arg for a in call.args.kwonlyargs] == ["out"] and call.args.kwarg.arg == "inputs"
+    assert (pathlib.Path(native.__file__).parent / "py.typed").exists()
