@@ -1,6 +1,7 @@
 """bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio,
 CppADCodeGen and CasADi; on a fixed base also the step rows of Pinocchio and crocoddyl) and
-`robodiff bench --json` (with the step rows' specs, specs/, on a fixed base), two rounds,
+`robodiff bench --json` (with the CRBA and frame-Jacobian specs, builtin_rows.py, and on a
+fixed base the step rows' specs, step_specs.py; all in specs/), two rounds,
 keeps the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
 --backend generated`) against Pinocchio's at the anchors' check states, and prints one
 table per robot.
@@ -19,6 +20,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report  # noqa: E402
 import robots  # noqa: E402
 import step_specs  # noqa: E402
+import builtin_rows  # noqa: E402
 import mujoco_side  # noqa: E402
 
 LIMIT = 1e-9  # relative error (scaled by max(1, |reference|)) a side may have
@@ -153,13 +155,14 @@ def measure(args, robot):
     os.makedirs(work, exist_ok=True)
     result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
               "rows": {}, "builds": {}, "checks": {}}
-    first, specs = None, []
+    first, specs, step_paths = None, [], []
     for r in range(args.rounds):
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio, CppADCodeGen, CasADi ...",
               file=sys.stderr)
         data = anchors_round(args, robot, work, reuse=r > 0)
-        if first is None and not robot.floating_base:  # the step rows: fixed-base robots only
-            specs = step_specs.write_specs(data["frame"], work)
+        if first is None:  # CRBA and frame J on every robot, the step rows on a fixed base only
+            step_paths = [] if robot.floating_base else step_specs.write_specs(data["frame"], work)
+            specs = builtin_rows.write_specs(data["frame"], work) + step_paths
         first = first or data
         merge_anchors(result, data)
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: robodiff bench ...", file=sys.stderr)
@@ -173,7 +176,8 @@ def measure(args, robot):
                 result["checks"][f"{title} {row['name']}"] = f"{row['max_err']:.1e}"
     print(f"anchors: {robot.title}: checking robodiff's values and Jacobians ...", file=sys.stderr)
     errors, hessian_err = check_robodiff(args, robot, first, work), None
-    if specs:
+    errors.update(builtin_rows.check_robodiff(args.robodiff, robot, first, work, rel_err, run))
+    if step_paths:
         step_errors, hessian_err = step_specs.check_robodiff(args.robodiff, robot, first, work, rel_err, run)
         errors.update(step_errors)
     for row, err in errors.items():

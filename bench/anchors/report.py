@@ -6,6 +6,7 @@ ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_
     ("rnea_jacobian_dense", "RNEA value + J"),
     ("aba_value", "ABA value"),
     ("aba_jacobian", "ABA value + J"),
+    # robodiff's side through --spec (builtin_rows.py)
     ("crba_value", "CRBA value"),
     ("frame_jacobian_value", "frame Jacobian value"),
     # user-function rows (step_rows.hpp, step_specs.py): fixed-base robots only
@@ -15,7 +16,8 @@ ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_
     ("step_cost_derivatives", "step + cost + derivatives"),
 ]
 STEP_ROWS = ["euler_step_value", "euler_step_jacobian", "step_cost_value", "step_cost_derivatives"]
-BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"] + STEP_ROWS
+BUILD_ROWS = ["rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian", "crba_value",
+              "frame_jacobian_value"] + STEP_ROWS
 # the sides, in the tables' column order (robodiff last), and their titles
 SIDE_TITLES = {"pinocchio": "Pinocchio", "cppadcodegen": "CppADCodeGen", "casadi": "CasADi", "crocoddyl": "crocoddyl",
                "mujoco": "MuJoCo", "robodiff": "robodiff"}
@@ -111,17 +113,24 @@ def plot(path, results):
         ax.set_visible(False)
     styles = {"pinocchio": "o-", "cppadcodegen": "s--", "casadi": "P--", "crocoddyl": "D-.", "mujoco": "v:",
               "robodiff": "^-"}
+    # one colour per side in every panel (a panel may lack some sides; one legend, in the first)
+    colours = {side: f"C{k}" for k, side in enumerate(SIDES)}
     for ax, (name, label) in zip(axes, kinds):
         for side in SIDES:
             pts = sorted((res["nv"], res["rows"][name][side]["us"]) for res in results
                          if (res["rows"].get(name, {}).get(side) or {}).get("us") is not None)
             if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], styles.get(side, "x:"), label=side)
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], styles.get(side, "x:"), color=colours[side],
+                        label=SIDE_TITLES[side])
         ax.set_title(label)
         ax.set_xlabel("degrees of freedom (nv)")
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("µs per call")
-    axes[0].legend()
+    handles = {}
+    for ax in axes:  # every side that has a point anywhere, in one legend
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, h)
+    axes[0].legend(handles.values(), handles.keys())
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -26,10 +26,11 @@ def crocoddyl_version():
         return "(not installed)"
 
 
-def write_specs(frame, work):
-    """specs/*.json with @FRAME@ replaced by `frame`, into work/; returns their paths."""
+def write_specs(frame, work, names=SPECS):
+    """specs/NAME.json of each name (default: the step rows') with @FRAME@ replaced by
+    `frame`, into work/; returns their paths."""
     paths = []
-    for name in SPECS:
+    for name in names:
         with open(os.path.join(HERE, "specs", f"{name}.json")) as f:
             text = f.read().replace("@FRAME@", frame)
         path = os.path.join(work, f"{name}.json")
