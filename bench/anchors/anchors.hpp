@@ -2,7 +2,7 @@
 // CppADCodeGen taping Pinocchio's templates) share: the robot, the states, the rows
 // they time, and their results. One row per function of `robodiff bench --json`, with
 // the same names (rnea_value, rnea_jacobian_dense, aba_value, aba_jacobian), plus
-// crba_value and frame_jacobian_value that robodiff bench does not time.
+// crba_value and frame_jacobian_value, which robodiff bench times from specs/ (--spec).
 #pragma once
 
 #include <map>
