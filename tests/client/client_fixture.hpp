@@ -118,4 +118,14 @@ inline std::vector<double> outputsFor(const client::Function& f) { return std::v
 
 inline std::span<const double> spanOf(const Eigen::VectorXd& v) { return {v.data(), static_cast<std::size_t>(v.size())}; }
 
+// `knots` random states of `model` for the RNEA Jacobian (q, v, a), knot after knot.
+inline std::vector<double> randomRneaKnots(const Model& model, std::size_t knots, std::uint64_t seed) {
+  const FunctionSpec spec = parseFunctionSpec(kRneaJacobianSpec);
+  std::vector<double> in;
+  for (std::size_t k = 0; k < knots; ++k)
+    for (const Eigen::VectorXd& block : randomRuntimeInputs(model, spec, seed + k))
+      in.insert(in.end(), block.data(), block.data() + block.size());
+  return in;
+}
+
 }  // namespace robodiff::testing

@@ -48,19 +48,10 @@ std::vector<std::size_t> outputBlockSizes(const client::Function& f) {
   return sizes;
 }
 
-std::vector<double> randomStates(const Model& model, std::size_t knots, std::uint64_t seed) {
-  const FunctionSpec spec = parseFunctionSpec(kRneaJacobianSpec);
-  std::vector<double> in;
-  for (std::size_t k = 0; k < knots; ++k)
-    for (const Eigen::VectorXd& block : randomRuntimeInputs(model, spec, seed + k))
-      in.insert(in.end(), block.data(), block.data() + block.size());
-  return in;
-}
-
 // evaluateBlocks on `knots` knots against evaluateBatch (batch) or evaluate (one knot):
 // every output bit equal.
 void expectSameBits(const client::Function& f, const Model& model, std::size_t knots, bool batch) {
-  const std::vector<double> in = randomStates(model, knots, 31 * knots + 5);
+  const std::vector<double> in = randomRneaKnots(model, knots, 31 * knots + 5);
   std::vector<double> want(knots * f.outputCount(), std::nan(""));
   const Status w = batch ? f.evaluateBatch(knots, in, want) : f.evaluate(in, want);
   ASSERT_TRUE(w.ok()) << w.message;
@@ -93,7 +84,7 @@ TEST(ClientEvaluateBlocks, ANaNInputIsRefusedAsEvaluateRefusesIt) {
   Client local(shared.server().options(Mode::Local));
   const client::Function f = local.function(local.loadModel(arm7Text()), kRneaJacobianSpec);
   ASSERT_EQ(f.mode(), Mode::Local);
-  std::vector<double> in = randomStates(shared.model(), 3, 1);
+  std::vector<double> in = randomRneaKnots(shared.model(), 3, 1);
   in[f.inputCount() + 9] = std::nan("");  // knot 1, the third value of v
   std::vector<double> packed_out(3 * f.outputCount());
   const Status want = f.evaluateBatch(3, in, packed_out);

@@ -24,16 +24,6 @@ using client::Mode;
 
 constexpr std::size_t kKnotCounts[] = {1, 7, 8, 9, 20, 1000};
 
-// `knots` random states of arm7 (q, v, a), knot after knot.
-std::vector<double> randomKnots(const Model& model, std::size_t knots, std::uint64_t seed) {
-  const FunctionSpec spec = parseFunctionSpec(kRneaJacobianSpec);
-  std::vector<double> in;
-  for (std::size_t k = 0; k < knots; ++k)
-    for (const Eigen::VectorXd& block : randomRuntimeInputs(model, spec, seed + k))
-      in.insert(in.end(), block.data(), block.data() + block.size());
-  return in;
-}
-
 // The knots one single evaluate() at a time.
 std::vector<double> oneByOne(const client::Function& f, std::size_t knots, const std::vector<double>& in) {
   const std::size_t in_n = f.inputCount(), out_n = f.outputCount();
@@ -90,7 +80,7 @@ TEST(ClientLocalBatch, EqualsSingleCallsForEveryRemainder) {
   const client::Function f = local.function(local.loadModel(arm7Text()), kRneaJacobianSpec);
   ASSERT_EQ(f.mode(), Mode::Local);
   for (const std::size_t knots : kKnotCounts) {
-    const std::vector<double> in = randomKnots(shared.model(), knots, 1000 * knots);
+    const std::vector<double> in = randomRneaKnots(shared.model(), knots, 1000 * knots);
     const std::vector<double> batch = batchOf(f, knots, in), single = oneByOne(f, knots, in);
     ASSERT_EQ(batch.size(), single.size());
     // Within 1e-12 relative: the batched code is compiled apart from the single one, and
@@ -126,7 +116,7 @@ TEST(ClientLocalBatch, GoesThroughTheLibrarysBatchedEntryPoint) {
 
   std::size_t differing = 0, values = 0;
   for (const std::size_t knots : kKnotCounts) {
-    const std::vector<double> in = randomKnots(shared.model(), knots, 7 + 1000 * knots);
+    const std::vector<double> in = randomRneaKnots(shared.model(), knots, 7 + 1000 * knots);
     const std::vector<double> batched = directBatch(direct, f.layout(), knots, in);
     EXPECT_EQ(bitDifferences(batchOf(f, knots, in), batched), 0u) << knots << " knots: local vs the batched entry";
     EXPECT_EQ(bitDifferences(batchOf(remote, knots, in), batched), 0u)
@@ -148,7 +138,7 @@ TEST(ClientLocalBatch, GoesThroughTheLibrarysBatchedEntryPoint) {
     std::thread([&] {
       const client::detail::ThreadBuffers& t = client::detail::threadBuffers();
       EXPECT_TRUE(t.batch_in.empty() && t.work.empty());
-      const std::vector<double> in = randomKnots(shared.model(), 9, 99);
+      const std::vector<double> in = randomRneaKnots(shared.model(), 9, 99);
       if (batched) batchOf(f, 9, in);
       else oneByOne(f, 9, in);
       regrouped = t.batch_in.size();
