@@ -4,7 +4,6 @@
 #include "function_call.hpp"
 
 #include <algorithm>
-#include <cstring>
 #include <memory_resource>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
@@ -112,7 +111,6 @@ PyFunction::PyFunction(client::Function function) : function_(std::move(function
     input_sizes_.push_back(b.size);
     input_keys_.push_back(nb::str(b.name.c_str()));
   }
-  std::size_t offset = 0;
   bool any_sparse = false;
   for (const rpc::OutputBlock& b : layout.outputs) {
     OutputShape o;
@@ -122,8 +120,6 @@ PyFunction::PyFunction(client::Function function) : function_(std::move(function
     o.sparse = b.layout == rpc::OutputLayout::SparseCsr;
     o.vector = !o.sparse && b.kind == rpc::OutputKind::Value && b.cols == 1;
     o.values = o.sparse ? b.nnz : std::size_t{b.rows} * b.cols;
-    o.offset = offset;
-    offset += o.values;
     outputs_.push_back(o);
     output_names_.push_back(b.name);
     output_keys_.push_back(nb::str(b.name.c_str()));

@@ -18,7 +18,6 @@ struct OutputShape {
   bool sparse = false;         // CSR: `values` doubles are its nnz values
   bool vector = false;         // a value with one column: a 1-D array
   std::size_t values = 0;      // doubles per knot
-  std::size_t offset = 0;      // in one knot's concatenated outputs
 };
 
 class PyFunction {

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <nanobind/stl/filesystem.h>
@@ -37,9 +36,6 @@ fs::path workerExecutable() {
 #endif
   return {};
 }
-
-// As `robodiff warmup`: the cores, at most 2.
-unsigned defaultWorkers() { return std::clamp(std::thread::hardware_concurrency(), 1u, 2u); }
 
 [[noreturn]] void throwStatus(StatusCode code, const std::string& message) {
   throw client::ClientError({code, message});
@@ -112,7 +108,7 @@ nb::list warmup(const std::vector<std::string>& urdfs, const std::vector<std::st
     relay.reported.assign(targets.size(), false);
     cache::Cache cache = openCache(cacheDirOr(cache_dir), true);
     workers::WorkerPoolOptions pool_options;
-    pool_options.workers = jobs.value_or(defaultWorkers());
+    pool_options.workers = jobs.value_or(workers::defaultWarmupWorkers());
     pool_options.worker_executable = workerExecutable();
     std::optional<workers::WorkerPool> pool;
     try {

@@ -1,9 +1,11 @@
 // Warmup's targets (warmup_targets.hpp).
 #include "robodiff/workers/warmup_targets.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "robodiff/functions/function_spec.hpp"
@@ -11,6 +13,8 @@
 namespace robodiff::workers {
 
 namespace fs = std::filesystem;
+
+unsigned defaultWarmupWorkers() { return std::clamp(std::thread::hardware_concurrency(), 1u, 2u); }
 
 void checkWarmupInputs(const WarmupRequest& request, const std::string& urdf_label, const std::string& spec_label) {
   for (const std::string& urdf : request.urdf_paths)

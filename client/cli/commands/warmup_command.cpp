@@ -8,7 +8,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -26,12 +25,10 @@
 namespace robodiff::cli {
 namespace {
 
-unsigned defaultJobs() { return std::clamp(std::thread::hardware_concurrency(), 1u, 2u); }
-
 struct WarmupArgs {
   std::vector<std::string> urdfs, specs;
   bool floating_base = false;
-  unsigned jobs = defaultJobs();
+  unsigned jobs = workers::defaultWarmupWorkers();
   std::string cache_dir, compiler, budget;
   std::optional<double> timeout_seconds;
   bool json = false;
@@ -97,7 +94,7 @@ void addWarmupCommand(CLI::App& app) {
       ->type_name("SPEC.json");
   CLI::Option* jobs = cmd->add_option(
          "--jobs,-j", args->jobs,
-         "Worker processes building at once (default " + std::to_string(defaultJobs()) + ": the cores, at most 2)")
+         "Worker processes building at once (default " + std::to_string(workers::defaultWarmupWorkers()) + ": the cores, at most 2)")
       ->check(CLI::Range(1u, 256u))
       ->type_name("N");
   CLI::Option* cache = cmd->add_option("--cache", args->cache_dir,

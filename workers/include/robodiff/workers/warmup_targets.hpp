@@ -20,6 +20,10 @@ struct WarmupRequest {
 void checkWarmupInputs(const WarmupRequest& request, const std::string& urdf_label = "urdf",
                        const std::string& spec_label = "spec");
 
+// Worker processes a warmup runs at once by default: the cores, at most 2 (each
+// compiler can take a core and a few hundred MiB).
+unsigned defaultWarmupWorkers();
+
 // The cross product, robot-major; a (robot, spec) pair named twice (the same files) once.
 std::vector<BuildTarget> warmupTargets(const WarmupRequest& request);
 
