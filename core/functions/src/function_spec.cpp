@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "robodiff/language/bounded_text.hpp"
+#include "build_options_json.hpp"
 #include "user_function_canonical.hpp"
 #include "user_function_json.hpp"
 #include "user_function_parse.hpp"
@@ -346,9 +347,7 @@ std::string normalizedSpecJson(const FunctionSpec& spec) {
   j["outputs"] = outputs;
   if (functionInfo(spec.function).needs_frame) j["frame"] = spec.frame;
   if (spec.function == ModelFunction::FrameJacobian) j["reference"] = toString(spec.reference);
-  j["build"] = {{"optimization", spec.build.optimization},
-                {"march_native", spec.build.march_native},
-                {"fast_math", spec.build.fast_math}};
+  j["build"] = detail::buildOptionsJson<json>(spec.build);
   return j.dump();
 }
 

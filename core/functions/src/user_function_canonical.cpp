@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "build_options_json.hpp"
+
 namespace robodiff::detail {
 
 namespace {
@@ -131,9 +133,7 @@ std::string canonicalUserFunctionJson(const FunctionSpec& spec) {
   j["inputs"] = inputs;
   j["terms"] = table.terms();
   j["outputs"] = outputs;
-  j["build"] = {{"optimization", spec.build.optimization},
-                {"march_native", spec.build.march_native},
-                {"fast_math", spec.build.fast_math}};
+  j["build"] = buildOptionsJson<json>(spec.build);
   return j.dump();
 }
 

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "build_options_json.hpp"
+
 namespace robodiff::detail {
 
 namespace {
@@ -63,9 +65,7 @@ std::string userFunctionSpecJson(const FunctionSpec& spec) {
   ordered_json outputs = ordered_json::array();
   for (const UserOutput& o : f.outputs) outputs.push_back(outputJson(o));
   j["outputs"] = outputs;
-  j["build"] = {{"optimization", spec.build.optimization},
-                {"march_native", spec.build.march_native},
-                {"fast_math", spec.build.fast_math}};
+  j["build"] = buildOptionsJson<ordered_json>(spec.build);
   return j.dump();
 }
 
