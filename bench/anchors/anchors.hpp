@@ -92,6 +92,8 @@ struct CodegenOptions {
   double cap_seconds = 120;
   bool reuse = false;
   std::vector<std::string> only;  // rows to build (empty: all)
+  // CppADCodeGen: also the step rows but step_cost_derivatives (fixed base, nq = nv only).
+  bool step_rows = false;
 };
 std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
                                        const std::vector<State>& checks, const Timing& plan,

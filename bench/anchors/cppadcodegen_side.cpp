@@ -12,6 +12,12 @@
 // derivatives: the tape's inputs are [q, dq, v, a] with q' = integrate(q, dq), and the
 // library's sparse Jacobian is asked for the (dense) block of the columns dq, v, a only,
 // evaluated at dq = 0.
+//
+// The step rows (step_rows.hpp) are taped the same way: ABA, the semi-implicit Euler
+// step and the frame-placement cost written on the CG scalar, for fixed-base robots whose
+// configuration is their tangent space (nq = nv: the step's Jacobian rows are then the
+// coordinates of q_next). step_cost_derivatives is not built: its Hessian is the exact
+// one, and the check compares Gauss-Newton Hessians.
 #include <pinocchio/codegen/cppadcg.hpp>  // first: Pinocchio's support of the CG scalar
 #include <cppad/cg.hpp>
 
@@ -26,6 +32,7 @@
 
 #include "anchors.hpp"
 #include "child_build.hpp"
+#include "step_rows.hpp"
 
 namespace anchors {
 namespace {
@@ -39,19 +46,24 @@ using ADS = CppAD::AD<CGD>;
 using ADVec = Eigen::Matrix<ADS, Eigen::Dynamic, 1>;
 using ADMat = Eigen::Matrix<ADS, Eigen::Dynamic, Eigen::Dynamic>;
 
+bool isStepRow(const std::string& row) { return row.rfind("euler_step", 0) == 0 || row.rfind("step_cost", 0) == 0; }
+
 // What a row's library takes and gives.
 struct CodegenShape {
   bool jacobian = false;   // value + Jacobian over [dq, v, a|tau] (inputs [q, dq, v, a|tau])
   bool q_only = false;     // CRBA and the frame Jacobian: inputs [q]
   int n_in = 0, n_out = 0;
+  int jacobian_rows = 0;   // the outputs the Jacobian has rows for (nv, or 2nv for the step)
 };
 
 CodegenShape shapeOf(const std::string& row, const pinocchio::Model& m) {
   CodegenShape s;
-  s.jacobian = row == "rnea_jacobian_dense" || row == "aba_jacobian";
+  s.jacobian = row == "rnea_jacobian_dense" || row == "aba_jacobian" || row == "euler_step_jacobian";
   s.q_only = row == "crba_value" || row == "frame_jacobian_value";
   s.n_in = s.q_only ? m.nq : s.jacobian ? m.nq + 3 * m.nv : m.nq + 2 * m.nv;
   s.n_out = row == "crba_value" ? m.nv * m.nv : row == "frame_jacobian_value" ? 6 * m.nv : m.nv;
+  if (isStepRow(row)) s.n_out = m.nq + m.nv + (row == "step_cost_value" ? 1 : 0);
+  s.jacobian_rows = isStepRow(row) ? 2 * m.nv : m.nv;
   return s;
 }
 
@@ -61,11 +73,31 @@ std::vector<double> inputAt(const std::string& row, const pinocchio::Model& m, c
   std::vector<double> x(s.q.data(), s.q.data() + m.nq);
   if (shape.q_only) return x;
   if (shape.jacobian) x.insert(x.end(), m.nv, 0.0);
-  const bool aba = row.rfind("aba", 0) == 0;
+  const bool aba = row.rfind("aba", 0) == 0 || isStepRow(row);
   const Eigen::VectorXd& last = aba ? s.tau : s.a;
   x.insert(x.end(), s.v.data(), s.v.data() + m.nv);
   x.insert(x.end(), last.data(), last.data() + m.nv);
   return x;
+}
+
+// The Euler step (and, for step_cost_value, the cost l at q) on the CG scalar, put as
+// [q_next; v_next (; l)].
+template <class Put>
+void tapeStep(const std::string& row, const pinocchio::ModelTpl<ADS>& model, pinocchio::DataTpl<ADS>& data,
+              pinocchio::FrameIndex frame, const ADVec& q, const ADVec& v, const ADVec& u, Put& put) {
+  const ADVec v_next = v + ADS(kStepDt) * pinocchio::aba(model, data, q, v, u);
+  const ADVec q_next = pinocchio::integrate(model, q, ADVec(ADS(kStepDt) * v_next));
+  put(q_next);
+  put(v_next);
+  if (row != "step_cost_value") return;
+  pinocchio::forwardKinematics(model, data, q);
+  pinocchio::updateFramePlacement(model, data, frame);
+  ADS l = ADS(kControlWeight) * u.squaredNorm();
+  for (int k = 0; k < 3; ++k) {
+    const ADS e = data.oMf[frame].translation()[k] - ADS(kCostTarget[static_cast<size_t>(k)]);
+    l += e * e;
+  }
+  put(Eigen::Matrix<ADS, 1, 1>::Constant(l));
 }
 
 // Records `row` through Pinocchio's templates on the CG scalar; returns the optimized tape.
@@ -103,6 +135,8 @@ std::unique_ptr<CppAD::ADFun<CGD>> tape(const std::string& row, const pinocchio:
     ADMat J = ADMat::Zero(6, nv);
     pinocchio::computeFrameJacobian(ad_model, ad_data, q, lastFrame(model), pinocchio::LOCAL_WORLD_ALIGNED, J);
     put(J);
+  } else if (isStepRow(row)) {
+    tapeStep(row, ad_model, ad_data, lastFrame(model), q, segment(at, nv), segment(at + nv, nv), put);
   }
   auto fun = std::make_unique<CppAD::ADFun<CGD>>(x, y);
   fun->optimize("no_compare_op");
@@ -117,7 +151,7 @@ void generateAndCompile(const std::string& row, const pinocchio::Model& model, c
   source.setCreateForwardZero(true);
   if (shape.jacobian) {
     std::vector<size_t> rows, cols;  // row-major, the columns [dq, v, a|tau]
-    for (int r = 0; r < model.nv; ++r)
+    for (int r = 0; r < shape.jacobian_rows; ++r)
       for (int c = 0; c < 3 * model.nv; ++c) rows.push_back(r), cols.push_back(model.nq + c);
     source.setCreateSparseJacobian(true);
     source.setCustomSparseJacobianElements(rows, cols);
@@ -157,7 +191,7 @@ Output outputOf(const std::string& row, const pinocchio::Model& m, LoadedModel& 
   else if (row == "frame_jacobian_value") o.jacobian = Eigen::Map<const Eigen::MatrixXd>(lm.y.data(), 6, m.nv);
   else o.value = y;
   if (shape.jacobian) {
-    o.jacobian = Eigen::MatrixXd::Zero(m.nv, 3 * m.nv);
+    o.jacobian = Eigen::MatrixXd::Zero(shape.jacobian_rows, 3 * m.nv);
     for (size_t k = 0; k < lm.jac.size(); ++k)
       o.jacobian(static_cast<Eigen::Index>(lm.rows[k]), static_cast<Eigen::Index>(lm.cols[k]) - m.nq) = lm.jac[k];
   }
@@ -170,7 +204,9 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
                                        const std::vector<State>& checks, const Timing& plan,
                                        const CodegenOptions& options) {
   std::vector<RowResult> rows;
-  for (const std::string& name : kRows) {
+  std::vector<std::string> names = kRows;
+  if (options.step_rows) names.insert(names.end(), {"euler_step_value", "euler_step_jacobian", "step_cost_value"});
+  for (const std::string& name : names) {
     RowResult r;
     r.name = name;
     if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), name) == options.only.end()) {
@@ -193,7 +229,7 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
     lm.model = lm.lib->model(name);
     const CodegenShape shape = shapeOf(name, model);
     lm.y.resize(static_cast<size_t>(shape.n_out));
-    lm.jac.resize(shape.jacobian ? static_cast<size_t>(3 * model.nv * model.nv) : 0);
+    lm.jac.resize(shape.jacobian ? static_cast<size_t>(3 * model.nv * shape.jacobian_rows) : 0);
     for (const State& s : checks) {
       lm.x = inputAt(name, model, s);
       r.outputs.push_back(outputOf(name, model, lm));

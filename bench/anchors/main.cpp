@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "anchors.hpp"
+#include "arg_reader.hpp"
 #include "step_rows.hpp"
 
 namespace {
@@ -42,30 +43,27 @@ std::vector<std::string> splitCommas(const std::string& s) {
 
 Args parseArgs(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("option " + k + " needs a value");
-      return argv[++i];
-    };
-    if (k == "--urdf") a.urdf = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--workdir") a.workdir = next();
+  for (anchors::ArgReader args(argc, argv); args.next();) {
+    const std::string k = args.option();
+    if (k == "--urdf") a.urdf = args.value();
+    else if (k == "--out") a.out = args.value();
+    else if (k == "--workdir") a.workdir = args.value();
     else if (k == "--floating-base") a.floating_base = true;
     else if (k == "--quick") a.quick = true;
     else if (k == "--reuse") a.reuse = true;
     else if (k == "--no-codegen") a.codegen = false;
     else if (k == "--no-casadi") a.casadi = false;
-    else if (k == "--cap") a.cap = std::stod(next());
-    else if (k == "--seed") a.seed = static_cast<unsigned>(std::stoul(next()));
-    else if (k == "--checks") a.checks = std::stoi(next());
-    else if (k == "--codegen-rows") a.codegen_rows = splitCommas(next());
+    else if (k == "--cap") a.cap = std::stod(args.value());
+    else if (k == "--seed") a.seed = static_cast<unsigned>(std::stoul(args.value()));
+    else if (k == "--checks") a.checks = std::stoi(args.value());
+    else if (k == "--codegen-rows") a.codegen_rows = splitCommas(args.value());
     else throw std::runtime_error("unknown option " + k);
   }
   if (a.urdf.empty() || a.out.empty() || a.workdir.empty())
     throw std::runtime_error("--urdf, --out and --workdir are required");
   for (const std::string& r : a.codegen_rows)
-    if (std::find(anchors::kRows.begin(), anchors::kRows.end(), r) == anchors::kRows.end())
+    if (std::find(anchors::kRows.begin(), anchors::kRows.end(), r) == anchors::kRows.end() &&
+        std::find(anchors::kStepRows.begin(), anchors::kStepRows.end(), r) == anchors::kStepRows.end())
       throw std::runtime_error("--codegen-rows: no row " + r);
   return a;
 }
@@ -173,6 +171,7 @@ int run(const Args& a) {
   std::vector<anchors::RowResult> cg;
   if (a.codegen) {
     anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
+    options.step_rows = !a.floating_base && model.nq == model.nv;
     cg = anchors::runCppADCodeGen(model, timed, checks, plan, options);
     checkAgainst(pin, cg);
   }

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "arg_reader.hpp"
 #include "commands/bench_timing.hpp"
 
 namespace {
@@ -40,17 +41,13 @@ struct Args {
 
 Args parseArgs(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("option " + k + " needs a value");
-      return argv[++i];
-    };
-    if (k == "--model") a.model = next();
-    else if (k == "--states") a.states = next();
-    else if (k == "--out") a.out = next();
+  for (anchors::ArgReader args(argc, argv); args.next();) {
+    const std::string k = args.option();
+    if (k == "--model") a.model = args.value();
+    else if (k == "--states") a.states = args.value();
+    else if (k == "--out") a.out = args.value();
     else if (k == "--quick") a.quick = true;
-    else if (k == "--eps") a.eps = std::stod(next());
+    else if (k == "--eps") a.eps = std::stod(args.value());
     else throw std::runtime_error("unknown option " + k);
   }
   if (a.model.empty() || a.states.empty() || a.out.empty())
