@@ -64,8 +64,9 @@ std::string cpuinfoField(const std::string& text, const std::string& field) {
 
 }  // namespace
 
-std::string targetCpuIdentity(bool native) {
+std::string targetCpuIdentity(bool native, const std::string& level) {
   const std::string arch = machineArchitecture();
+  if (!level.empty()) return arch + " " + level;
   if (!native) return arch + " generic";
   std::ifstream f("/proc/cpuinfo");
   std::stringstream text;
@@ -81,6 +82,13 @@ std::string targetCpuIdentity(bool native) {
   for (const std::string& w : flags) joined += (joined.empty() ? "" : " ") + w;
   return arch + " native; vendor " + cpuinfoField(t, "vendor_id") + "; family " + cpuinfoField(t, "cpu family") +
          "; model " + cpuinfoField(t, "model") + " (" + cpuinfoField(t, "model name") + "); flags " + joined;
+}
+
+std::string targetLabel(bool native, const std::string& level) {
+  if (!level.empty()) return level;
+  if (!native) return "generic";
+  static const std::string label = "native:" + sha256Hex(targetCpuIdentity(true)).substr(0, 16);
+  return label;
 }
 
 bool isCacheKey(const std::string& text) {

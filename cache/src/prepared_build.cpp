@@ -67,14 +67,15 @@ PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, co
   p.identity.generator = generatorIdentity(p.options, c_name);
   p.identity.compiler = cachedCompilerIdentity(effective);
   p.identity.flags = codegen::compilerFlags(effective);
-  p.identity.target_cpu = targetCpuIdentity(spec.build.march_native);
+  p.identity.target_cpu = targetCpuIdentity(spec.build.march_native, spec.build.target);
   p.key = p.identity.key();
 
   p.info.model_hash = model_hash;
   p.info.robot = model.name;
   p.info.function = c_name;
   p.info.spec = p.identity.spec;
-  p.info.compiler = p.identity.compiler + " " + spaceSeparated(p.identity.flags);
+  p.info.compiler = p.identity.compiler + " " + spaceSeparated(p.identity.flags) +
+                    " target=" + targetLabel(spec.build.march_native, spec.build.target);
   return p;
 }
 

@@ -82,5 +82,24 @@ TEST(PreparedBuild, TheModelHashIsTakenAsGiven) {
   EXPECT_NE(right.key, other.key);
 }
 
+// A build host compiling for a robot's x86-64 level: the level, not this CPU, is in the
+// key and the flags, and the index row records it for the loader's check.
+TEST(PreparedBuild, ATargetLevelIsInTheKeyAndTheEntry) {
+  const std::string urdf = arm7UrdfText();
+  json spec = json::parse(rneaJacobianSpecText());
+  spec["build"] = {{"target", "x86-64-v3"}};
+  const PreparedBuild level = prepareArm(urdf, spec.dump());
+  const PreparedBuild generic = prepareArm(urdf, rneaJacobianSpecText("O2", false));
+  const PreparedBuild native = prepareArm(urdf, rneaJacobianSpecText("O2", true));
+  EXPECT_NE(level.key, generic.key);
+  EXPECT_NE(level.key, native.key);
+  EXPECT_TRUE(includes(level.identity.target_cpu, "x86-64-v3")) << level.identity.target_cpu;
+  EXPECT_FALSE(includes(level.identity.target_cpu, "vendor")) << "the build host's CPU leaked into the key";
+  EXPECT_TRUE(includes(level.info.compiler, "-march=x86-64-v3 -mtune=generic")) << level.info.compiler;
+  EXPECT_TRUE(level.info.compiler.ends_with(" target=x86-64-v3")) << level.info.compiler;
+  EXPECT_TRUE(generic.info.compiler.ends_with(" target=generic")) << generic.info.compiler;
+  EXPECT_TRUE(native.info.compiler.ends_with(" target=" + targetLabel(true))) << native.info.compiler;
+}
+
 }  // namespace
 }  // namespace robodiff::cache

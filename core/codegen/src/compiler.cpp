@@ -159,7 +159,12 @@ std::string compilerProgram(const CompilerOptions& options) {
 std::vector<std::string> compilerFlags(const CompilerOptions& options) {
   static const char* levels[] = {"-O0", "-O1", "-O2", "-O3"};
   std::vector<std::string> flags{levels[static_cast<int>(options.optimization)]};
-  if (options.native) flags.push_back("-march=native");
+  if (!options.march.empty()) {
+    flags.push_back("-march=" + options.march);
+    flags.push_back("-mtune=generic");
+  } else if (options.native) {
+    flags.push_back("-march=native");
+  }
   if (options.fast_math) flags.push_back("-ffast-math");
   flags.push_back("-fPIC");
   // Library functions need not set errno (the generated code never reads it): lets the

@@ -9,9 +9,9 @@ namespace robodiff::detail {
 
 template <class Json>
 Json buildOptionsJson(const BuildOptions& build) {
-  return Json{{"optimization", build.optimization},
-              {"march_native", build.march_native},
-              {"fast_math", build.fast_math}};
+  Json j{{"optimization", build.optimization}, {"march_native", build.march_native}, {"fast_math", build.fast_math}};
+  if (!build.target.empty()) j["target"] = build.target;  // absent by default: earlier keys stay
+  return j;
 }
 
 }  // namespace robodiff::detail

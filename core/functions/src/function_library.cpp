@@ -33,6 +33,7 @@ codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::
                       : o == "O3" ? OptimizationLevel::O3
                                   : OptimizationLevel::O2;
   base.native = build.march_native;
+  base.march = build.target;
   base.fast_math = build.fast_math;
   return base;
 }

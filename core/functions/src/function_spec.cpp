@@ -1,5 +1,6 @@
 #include "robodiff/functions/function_spec.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -284,11 +285,27 @@ class Parser {
     return spec;
   }
 
+  // "target": "native" | "x86-64" (march_native true / false) | an x86-64 level, which
+  // turns march_native off; a march_native that says otherwise is refused.
+  void parseTarget(const json& b, BuildOptions& build) const {
+    const std::string target = string(b["target"], "build.target");
+    const bool level = std::find_if(std::begin(kTargetLevels), std::end(kTargetLevels),
+                                    [&](const char* l) { return target == l; }) != std::end(kTargetLevels);
+    if (!level && target != "native" && target != "x86-64")
+      fail("build.target", language::quote(target) + " is not one of native, x86-64, x86-64-v2, x86-64-v3, x86-64-v4");
+    const bool native = target == "native";
+    if (b.contains("march_native") && build.march_native != native)
+      fail("build.march_native", std::string(build.march_native ? "true" : "false") + " contradicts target " +
+                                     language::quote(target));
+    build.march_native = native;
+    if (level) build.target = target;
+  }
+
   void parseBuild(const json& root, FunctionSpec& spec) const {
     if (root.contains("build")) {
       const json& b = root["build"];
       if (!b.is_object()) fail("build", "must be an object");
-      onlyKeys(b, "build", {"optimization", "march_native", "fast_math"});
+      onlyKeys(b, "build", {"optimization", "march_native", "fast_math", "target"});
       if (b.contains("optimization")) {
         spec.build.optimization = string(b["optimization"], "build.optimization");
         const std::set<std::string> levels = {"O0", "O1", "O2", "O3"};
@@ -300,6 +317,7 @@ class Parser {
         if (!b[flag].is_boolean()) fail(std::string("build.") + flag, shown(b[flag]) + " is not true or false");
         (std::string(flag) == "march_native" ? spec.build.march_native : spec.build.fast_math) = b[flag].get<bool>();
       }
+      if (b.contains("target")) parseTarget(b, spec.build);
     }
   }
 

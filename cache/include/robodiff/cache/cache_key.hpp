@@ -18,7 +18,7 @@ struct BuildIdentity {
   std::string generator;          // codegen::kGeneratorVersion plus builder/codegen options
   std::string compiler;           // the compiler's `--version` line
   std::vector<std::string> flags; // exactly as passed to the compiler
-  std::string target_cpu;         // targetCpuIdentity(native)
+  std::string target_cpu;         // targetCpuIdentity(native, level)
 
   // The text that is hashed: one "field=value" line per field, in a fixed order.
   std::string canonicalText() const;
@@ -27,8 +27,15 @@ struct BuildIdentity {
 
 // What the generated code may assume about the CPU. For a native build: the machine
 // architecture, the CPU vendor and model, and its instruction-set flags (from
-// /proc/cpuinfo). Otherwise: only the machine architecture.
-std::string targetCpuIdentity(bool native);
+// /proc/cpuinfo). For a named level ("x86-64-v3"): the architecture and the level.
+// Otherwise: only the machine architecture.
+std::string targetCpuIdentity(bool native, const std::string& level = "");
+
+// The short name of a build's target that an entry records (EntryInfo::compiler ends with
+// " target=<label>"), what a loader checks before it opens the library (runtime/
+// target_check.hpp): "generic", the level, or "native:" and 16 hex digits of the SHA-256
+// of this CPU's identity.
+std::string targetLabel(bool native, const std::string& level = "");
 
 // True when `text` looks like a key (64 lowercase hex digits); keys name directories.
 bool isCacheKey(const std::string& text);

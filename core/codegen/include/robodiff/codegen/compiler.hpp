@@ -27,6 +27,9 @@ struct CompilerOptions {
   std::string compiler;
   OptimizationLevel optimization = OptimizationLevel::O2;
   bool native = false;     // -march=native: faster code (FMA, AVX), runs only on this kind of CPU
+  // A named target instead (an x86-64 level, "x86-64-v3"): -march=<march> -mtune=generic,
+  // code for every CPU of that level, not only this one. Overrides `native`.
+  std::string march;
   bool fast_math = false;  // -ffast-math: changes results; only when asked for
   // Wall-clock limit of the whole build; compilers still running then are killed.
   std::chrono::milliseconds timeout = std::chrono::minutes(10);

@@ -48,9 +48,17 @@ struct InputSpec {
   std::optional<std::vector<double>> fixed;  // set: a constant folded into the code
 };
 
+// The x86-64 levels a spec's build may target (psABI micro-architecture levels).
+inline constexpr const char* kTargetLevels[] = {"x86-64-v2", "x86-64-v3", "x86-64-v4"};
+
 struct BuildOptions {
   std::string optimization = "O2";  // O0 | O1 | O2 | O3
   bool march_native = true;
+  // The CPU the code is for, when it is not this one: an x86-64 level (kTargetLevels),
+  // what a build host compiles for the robots of a fleet. Empty: march_native decides
+  // (this CPU, or any x86-64). The spec's "target" also takes "native" and "x86-64",
+  // which are stored as march_native true / false.
+  std::string target;
   bool fast_math = false;           // never on unless asked: it changes results
 };
 
