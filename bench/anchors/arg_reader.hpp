@@ -1,7 +1,9 @@
-// The anchors' programs read "--option [value]" arguments the same way: one option after
-// another, its value taken on demand, a missing value named.
+// What the anchors' programs share around their work: reading "--option [value]"
+// arguments (one option after another, its value taken on demand, a missing value named)
+// and turning an exception into an error line and exit status 2.
 #pragma once
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -25,5 +27,16 @@ class ArgReader {
   char** argv_;
   int index_ = 0;
 };
+
+// A program's main: `run`'s exit status, or 2 with "<program>: error: <what>" on stderr.
+template <class Run>
+int guardedMain(const char* program, Run run) {
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", program, e.what());
+    return 2;
+  }
+}
 
 }  // namespace anchors

@@ -183,10 +183,5 @@ int run(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parseArgs(argc, argv));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "mujoco_bench: error: %s\n", e.what());
-    return 2;
-  }
+  return anchors::guardedMain("mujoco_bench", [&] { return run(parseArgs(argc, argv)); });
 }

@@ -7,7 +7,8 @@
 // client of the same domain each need a process of their own.
 //
 // Child roles (ROBODIFF_DDS_CHILD="<role> <domain> <keystore>/<identity> | open"):
-//   server  a CallerEchoService behind a DdsServer until killed;
+//   server  a CallerEchoService behind a DdsServer until killed; with a 4th word, a file
+//           where it appends "<client id> <caller>" for every LoadModel it serves;
 //   client  kDdsChildCalls LoadModels and Evaluates; exit status 0 when all were answered
 //           correctly, 3 when one was not.
 
@@ -38,15 +39,25 @@ extern char** environ;
 
 namespace robodiff::testing {
 
-// FakeService whose LoadModel answers with who called: "<name>[+operator][+authenticated]".
+// FakeService whose LoadModel answers with who called: "<name>[+operator][+authenticated]",
+// and, given a file, appends "<client id> <that answer>" to it (what the server saw).
 class CallerEchoService : public FakeService {
  public:
   using FakeService::FakeService;
   Status loadModel(const server::CallContext& ctx, const rpc::LoadModelRequest&, rpc::LoadModelReply& reply) override {
     reply.model_id = ctx.caller.name + (ctx.caller.operator_ ? "+operator" : "") +
                      (ctx.caller.authenticated ? "+authenticated" : "");
+    if (served_) {
+      std::fprintf(served_, "%.*s %s\n", static_cast<int>(ctx.client_id.size()), ctx.client_id.data(),
+                   reply.model_id.c_str());
+      std::fflush(served_);
+    }
     return {};
   }
+  void recordServedTo(std::FILE* file) { served_ = file; }
+
+ private:
+  std::FILE* served_ = nullptr;
 };
 
 inline constexpr const char* kDdsChildVariable = "ROBODIFF_DDS_CHILD";
@@ -57,8 +68,9 @@ inline dds_codec::DdsSecurity childSecurity(const std::string& identity) {
   return identity == "open" ? dds_codec::DdsSecurity{} : dds_codec::securityFromSpec(identity);
 }
 
-inline void runDdsChildServer(std::uint32_t domain, const std::string& identity) {
+inline void runDdsChildServer(std::uint32_t domain, const std::string& identity, const std::string& served_log) {
   CallerEchoService service("srv-secure-env");
+  if (!served_log.empty()) service.recordServedTo(std::fopen(served_log.c_str(), "a"));  // closed at exit
   server::Logger log(stderr, server::LogLevel::Warn);
   server::DdsServerOptions options;
   options.domain_id = domain;
@@ -91,12 +103,12 @@ inline int runDdsChildIfAsked() {
   const char* spec = std::getenv(kDdsChildVariable);
   if (!spec) return 0;
   std::istringstream words(spec);
-  std::string role, identity;
+  std::string role, identity, served_log;
   std::uint32_t domain = 0;
-  words >> role >> domain >> identity;
+  words >> role >> domain >> identity >> served_log;
   int status = 0;
   try {
-    if (role == "server") runDdsChildServer(domain, identity);
+    if (role == "server") runDdsChildServer(domain, identity, served_log);
     else status = runDdsChildClient(domain, identity);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "DDS test child (%s): %s\n", spec, e.what());
@@ -107,13 +119,16 @@ inline int runDdsChildIfAsked() {
 inline const int kDdsChildRan = runDdsChildIfAsked();  // at start-up, before any test
 
 // This test binary again as a child (fork + exec: a clean DDS runtime); killed and reaped
-// when it goes out of scope. `identity`: "<keystore>/<name>" or "open".
+// when it goes out of scope. `identity`: "<keystore>/<name>" or "open"; `served_log`: the
+// server's record of what it served (none when empty).
 class DdsChild {
  public:
-  DdsChild(const std::string& role, std::uint32_t domain, const std::string& identity) {
+  DdsChild(const std::string& role, std::uint32_t domain, const std::string& identity,
+           const std::string& served_log = {}) {
     std::vector<std::string> env;
     for (char** e = environ; *e; ++e) env.emplace_back(*e);
-    env.push_back(std::string(kDdsChildVariable) + "=" + role + " " + std::to_string(domain) + " " + identity);
+    env.push_back(std::string(kDdsChildVariable) + "=" + role + " " + std::to_string(domain) + " " + identity + " " +
+                  served_log);
     std::vector<char*> envp;
     for (auto& e : env) envp.push_back(e.data());
     envp.push_back(nullptr);
