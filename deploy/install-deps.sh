@@ -13,6 +13,7 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
   coinor-libipopt-dev libzstd-dev
+  libarchive-dev  # the tar files of signed cache entries (robodiff cache export/import)
   libspdlog-dev libfmt-dev  # robodiffd's log lines (spdlog formats with fmt)
   libtomlplusplus-dev  # toml++: robodiffd.conf is TOML (server/robodiffd/src/config_file.cpp)
   clang tcc

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   addBenchCommand(app);
   addWarmupCommand(app);
   addCacheCommand(app);
+  addKeygenCommand(app);
   addSecurityCommand(app);
   addTrajectoryCommand(app);
   addIdentifyCommand(app);

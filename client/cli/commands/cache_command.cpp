@@ -424,6 +424,8 @@ void addCacheCommand(CLI::App& app) {
       "Nothing is removed when a key is unknown or a prefix is ambiguous (the matches are listed).\n"
       "Exit status: 0 when every named entry was removed (--all: entries in use are kept), 1 on errors.");
   rm->callback([args] { removeEntries(*args); });
+
+  addCacheTransferCommands(*cmd);  // export, import
 }
 
 }  // namespace robodiff::cli

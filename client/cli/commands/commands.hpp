@@ -14,6 +14,9 @@ void addCheckCommand(CLI::App& app);     // check_command.cpp
 void addBenchCommand(CLI::App& app);     // bench_command.cpp
 void addWarmupCommand(CLI::App& app);    // warmup_command.cpp
 void addCacheCommand(CLI::App& app);     // cache_command.cpp
+// `cache export` and `cache import` (cache_transfer_command.cpp), added by addCacheCommand.
+void addCacheTransferCommands(CLI::App& cache_command);
+void addKeygenCommand(CLI::App& app);    // keygen_command.cpp (keys that sign cache artifacts)
 void addSecurityCommand(CLI::App& app);  // security_command.cpp (DDS Security keystore)
 // Batch work (batch/): trajectories, identification, trajectory optimisation.
 void addTrajectoryCommand(CLI::App& app);  // trajectory_command.cpp
