@@ -48,7 +48,9 @@ void placement(std::string& out, const SE3<double>& m) {
 }  // namespace
 
 std::string canonicalForm(const Model& model) {
-  std::string out = "robodiff-model 1\n";
+  // Version 2: the numbers are computed portably (portable_geometry.hpp), the same on
+  // every host; version 1 forms depended on -march and on the CPU.
+  std::string out = "robodiff-model 2\n";
   out += model.root == RootJoint::FreeFlyer ? "root freeflyer\n" : "root fixed\n";
   out += "gravity";
   numbers(out, model.gravity);

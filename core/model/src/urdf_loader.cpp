@@ -1,19 +1,22 @@
 #include "robodiff/model/urdf_loader.hpp"
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <stdexcept>
 #include <mutex>
 #include <sstream>
 
-#include <Eigen/Geometry>
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include "mass_matrix_check.hpp"
+#include "portable_geometry.hpp"
 #include "urdf_validation.hpp"
 #include "utf8_check.hpp"
 #include "xacro_check.hpp"
@@ -30,36 +33,35 @@ double snap(double x) {
   return x;
 }
 
-Eigen::Matrix3d snapped(const Eigen::Matrix3d& m) { return m.unaryExpr(&snap); }
-
-Eigen::Matrix3d toRotation(const urdf::Rotation& r) {
-  Eigen::Quaterniond q(r.w, r.x, r.y, r.z);
-  return snapped(q.normalized().toRotationMatrix());
+// The rpy angles the validator read for `name`; every joint and every link with an
+// <inertial> has an entry.
+const std::array<double, 3>& rpyOf(const std::map<std::string, std::array<double, 3>>& angles,
+                                   const std::string& name) {
+  auto it = angles.find(name);
+  if (it == angles.end()) throw std::logic_error("URDF loader: no origin angles recorded for '" + name + "'");
+  return it->second;
 }
 
-SE3<double> toSE3(const urdf::Pose& pose) {
-  return {toRotation(pose.rotation), Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z)};
+// An origin: the translation urdfdom parsed (exactly) and the rotation of the rpy as
+// written, computed portably (urdfdom's quaternion depends on the host's libm).
+SE3<double> toSE3(const urdf::Pose& pose, const std::array<double, 3>& rpy) {
+  return {portable::rpyRotation(rpy[0], rpy[1], rpy[2]).unaryExpr(&snap),
+          Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z)};
 }
 
 // Inertia of a URDF link, in the link frame.
-Inertia<double> linkInertia(const urdf::Link& link) {
+Inertia<double> linkInertia(const urdf::Link& link, const detail::UrdfRotations& rotations) {
   if (!link.inertial) return Inertia<double>::Zero();
   const urdf::Inertial& in = *link.inertial;
-  SE3<double> origin = toSE3(in.origin);
+  SE3<double> origin = toSE3(in.origin, rpyOf(rotations.inertial_rpy, link.name));
   Eigen::Matrix3d I;
   I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-  return Inertia<double>{in.mass, origin.translation, origin.rotation * I * origin.rotation.transpose()};
-}
-
-// Rigid union; two massless bodies keep only their rotational inertias.
-Inertia<double> merge(const Inertia<double>& a, const Inertia<double>& b) {
-  if (a.mass + b.mass > 0) return a + b;
-  return {0.0, Eigen::Vector3d::Zero(), a.inertia + b.inertia};
+  return Inertia<double>{in.mass, origin.translation, portable::rotateInertia(origin.rotation, I)};
 }
 
 void setAxis(Joint& joint, const urdf::Vector3& axis) {
   Eigen::Vector3d a(axis.x, axis.y, axis.z);
-  a = a.normalized().unaryExpr(&snap);
+  a = portable::normalized(a).unaryExpr(&snap);
   joint.axis = a;
   joint.axis_kind = a == Eigen::Vector3d::UnitX()   ? AxisKind::X
                     : a == Eigen::Vector3d::UnitY() ? AxisKind::Y
@@ -137,7 +139,7 @@ struct Pending {
   SE3<double> placement;
 };
 
-Model build(const urdf::ModelInterface& urdf_model, RootJoint root) {
+Model build(const urdf::ModelInterface& urdf_model, RootJoint root, const detail::UrdfRotations& rotations) {
   Model model;
   model.name = urdf_model.getName();
   model.root = root;
@@ -170,13 +172,15 @@ Model build(const urdf::ModelInterface& urdf_model, RootJoint root) {
     }
     const urdf::Link& link = *at.child;
     if (joint >= 0)  // bodies fixed to the universe do not move and carry no dynamics
-      model.bodies[joint] = merge(model.bodies[joint], linkInertia(link).transformedBy(link_placement));
+      model.bodies[joint] = portable::mergeInertias(
+          model.bodies[joint], portable::transformInertia(linkInertia(link, rotations), link_placement));
     model.frames.push_back({link.name, FrameType::Body, joint, link_placement});
 
     const auto& children = link.child_joints;
     for (auto it = children.rbegin(); it != children.rend(); ++it)
       stack.push_back({*it, urdf_model.getLink((*it)->child_link_name), joint,
-                       link_placement * toSE3((*it)->parent_to_joint_origin_transform)});
+                       portable::compose(link_placement, toSE3((*it)->parent_to_joint_origin_transform,
+                                                               rpyOf(rotations.joint_rpy, (*it)->name)))});
   }
   model.finalize();
   return model;
@@ -201,9 +205,9 @@ Model loadUrdfString(const std::string& xml, RootJoint root, const std::string& 
   detail::checkUtf8(xml, source_name);         // before TinyXML, which reads past a cut sequence
   detail::refuseXacro(xml, source_name);       // a clear word instead of "no <link>"
   const bool dynamic = physics == PhysicsCheck::Dynamic;
-  detail::validateUrdfXml(xml, source_name, dynamic);
+  const detail::UrdfRotations rotations = detail::validateUrdfXml(xml, source_name, dynamic);
   urdf::ModelInterfaceSharedPtr parsed = parseWithUrdfdom(normaliseWhitespace(xml), source_name);
-  Model model = build(*parsed, root);
+  Model model = build(*parsed, root, rotations);
   if (dynamic) detail::checkMassMatrixRegular(model, source_name);
   return model;
 }

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -81,18 +82,21 @@ class Validator {
     return out;
   }
 
-  void checkOrigin(const TiXmlElement* owner, const TiXmlElement* parent) const {
+  // Checks the <origin> of `parent` (read as urdfdom does: its first one) and returns
+  // its rpy angles, zero when there is none.
+  std::array<double, 3> checkOrigin(const TiXmlElement* owner, const TiXmlElement* parent) const {
     static const std::vector<double> zero3{0, 0, 0};
-    if (const TiXmlElement* o = parent->FirstChildElement("origin")) {
-      numbers(owner, o, "xyz", 3, &zero3);
-      numbers(owner, o, "rpy", 3, &zero3);
-    }
+    const TiXmlElement* o = parent->FirstChildElement("origin");
+    if (!o) return {0, 0, 0};
+    numbers(owner, o, "xyz", 3, &zero3);
+    const std::vector<double> rpy = numbers(owner, o, "rpy", 3, &zero3);
+    return {rpy[0], rpy[1], rpy[2]};
   }
 
-  void checkLink(const TiXmlElement* link) const {
+  void checkLink(const TiXmlElement* link) {
     const TiXmlElement* inertial = link->FirstChildElement("inertial");
     if (!inertial) return;
-    checkOrigin(link, inertial);
+    rotations_.inertial_rpy[link->Attribute("name")] = checkOrigin(link, inertial);
     const TiXmlElement* mass = inertial->FirstChildElement("mass");
     if (!mass) fail(inertial, describe(link) + ": <inertial> has no <mass>");
     double m = numbers(link, mass, "value", 1)[0];
@@ -126,7 +130,7 @@ class Validator {
     }
   }
 
-  void checkJoint(const TiXmlElement* joint) const {
+  void checkJoint(const TiXmlElement* joint) {
     const char* type = joint->Attribute("type");
     const std::string what = describe(joint);
     if (!type) fail(joint, what + ": no 'type' attribute");
@@ -147,7 +151,7 @@ class Validator {
       if (!e || !e->Attribute("link"))
         fail(joint, what + ": missing <" + role + " link=\"...\">");
     }
-    checkOrigin(joint, joint);
+    rotations_.joint_rpy[joint->Attribute("name")] = checkOrigin(joint, joint);
     if (t == "fixed") return;
     if (const TiXmlElement* axis = joint->FirstChildElement("axis")) {
       auto a = numbers(joint, axis, "xyz", 3);
@@ -182,7 +186,7 @@ class Validator {
     }
   }
 
-  void run(const std::string& xml) {
+  UrdfRotations run(const std::string& xml) {
     TiXmlDocument doc;
     doc.Parse(xml.c_str(), nullptr, TIXML_ENCODING_UTF8);
     if (doc.Error()) {
@@ -248,17 +252,19 @@ class Validator {
         if (!seen.count(name)) fail(element, "link '" + name + "' is not reachable from root '" + roots[0] +
                                                  "' (its joints form a cycle)");
     }
+    return std::move(rotations_);
   }
 
  private:
   std::string source_;
   bool triangle_inequality_;
+  UrdfRotations rotations_;
 };
 
 }  // namespace
 
-void validateUrdfXml(const std::string& xml, const std::string& source, bool triangle_inequality) {
-  Validator(source, triangle_inequality).run(xml);
+UrdfRotations validateUrdfXml(const std::string& xml, const std::string& source, bool triangle_inequality) {
+  return Validator(source, triangle_inequality).run(xml);
 }
 
 }  // namespace robodiff::detail
