@@ -92,15 +92,15 @@ struct CodegenOptions {
   double cap_seconds = 120;
   bool reuse = false;
   std::vector<std::string> only;  // rows to build (empty: all)
-  // CppADCodeGen: also the step rows but step_cost_derivatives (fixed base, nq = nv only).
+  // Also the step rows but step_cost_derivatives (fixed base, nq = nv only).
   bool step_rows = false;
 };
 std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
                                        const std::vector<State>& checks, const Timing& plan,
                                        const CodegenOptions& options);
 
-// CasADi: each of the four rows of `robodiff bench` (not CRBA, frame J) as Pinocchio's
-// algorithm on casadi::SX, a casadi::Function (value, or value + SX Jacobian over
+// CasADi: each of the four rows of `robodiff bench` (not CRBA, frame J), and the step rows
+// with options.step_rows, as Pinocchio's algorithm on casadi::SX, a casadi::Function (value, or value + SX Jacobian over
 // [dq, v, a|tau]), C from casadi::CodeGenerator compiled with gcc -O3 -march=native
 // into a library of its own under options.workdir, called through the generated C
 // function. Builds, cap and reuse as CppADCodeGen's (casadi_side.cpp).

@@ -8,6 +8,7 @@
 #include <pinocchio/autodiff/casadi.hpp>  // first: Pinocchio's support of the SX scalar
 
 #include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody/data.hpp>
@@ -48,15 +49,38 @@ SXVector entriesOf(const SX& sym) {
   return v;
 }
 
-casadi::Function buildFunction(const Tree& tree, Algorithm algorithm, bool with_jacobian, const std::string& name) {
+// The step rows' outputs: [q_next; v_next] and, for step_cost, l at q.
+SXVector stepOutputs(const Tree& tree, const SXModel& model, pinocchio::DataTpl<SX>& data, Algorithm algorithm,
+                     const StepParameters& step, const SXVector& q, const SXVector& v, const SXVector& u) {
+  const SX dt(step.dt);
+  const SXVector v_next = v + dt * pinocchio::aba(model, data, q, v, u);
+  const SXVector q_next = pinocchio::integrate(model, q, SXVector(dt * v_next));
+  SXVector y(model.nq + model.nv + (algorithm == Algorithm::step_cost ? 1 : 0));
+  y << q_next, v_next;
+  if (algorithm != Algorithm::step_cost) return y;
+  pinocchio::forwardKinematics(model, data, q);
+  const auto frame = data.oMi[tree.frame_parent] * tree.frame_placement.cast<SX>();
+  SX l = SX(step.control_weight) * u.dot(u);
+  for (int k = 0; k < 3; ++k) {
+    const SX e = frame.translation()[k] - SX(step.target[k]);
+    l += e * e;
+  }
+  y[y.size() - 1] = l;
+  return y;
+}
+
+casadi::Function buildFunction(const Tree& tree, Algorithm algorithm, const StepParameters& step, bool with_jacobian,
+                               const std::string& name) {
   const SXModel model = sxModelOf(tree);
   pinocchio::DataTpl<SX> data(model);
   const SX q = SX::sym("q", model.nq), dq = SX::sym("dq", model.nv);
   const SX v = SX::sym("v", model.nv), u = SX::sym("u", model.nv);
   SXVector q_at = entriesOf(q);
   if (with_jacobian) q_at = pinocchio::integrate(model, q_at, entriesOf(dq));
-  const SXVector y_eigen = algorithm == Algorithm::rnea ? pinocchio::rnea(model, data, q_at, entriesOf(v), entriesOf(u))
-                                                        : pinocchio::aba(model, data, q_at, entriesOf(v), entriesOf(u));
+  SXVector y_eigen;
+  if (algorithm == Algorithm::rnea) y_eigen = pinocchio::rnea(model, data, q_at, entriesOf(v), entriesOf(u));
+  else if (algorithm == Algorithm::aba) y_eigen = pinocchio::aba(model, data, q_at, entriesOf(v), entriesOf(u));
+  else y_eigen = stepOutputs(tree, model, data, algorithm, step, q_at, entriesOf(v), entriesOf(u));
   SX y_sparse;
   pinocchio::casadi::copy(y_eigen, y_sparse);
   const SX y = SX::densify(y_sparse);  // every entry stored: the C function writes nv values
@@ -68,10 +92,10 @@ casadi::Function buildFunction(const Tree& tree, Algorithm algorithm, bool with_
 
 }  // namespace
 
-bool generateSource(const Tree& tree, Algorithm algorithm, bool with_jacobian, const char* name, const char* c_file,
-                    char* error, std::size_t error_size) {
+bool generateSource(const Tree& tree, Algorithm algorithm, const StepParameters& step, bool with_jacobian,
+                    const char* name, const char* c_file, char* error, std::size_t error_size) {
   try {
-    const casadi::Function function = buildFunction(tree, algorithm, with_jacobian, name);
+    const casadi::Function function = buildFunction(tree, algorithm, step, with_jacobian, name);
     casadi::CodeGenerator generator(c_file, casadi::Dict{{"with_header", false}});
     generator.add(function);
     generator.generate();

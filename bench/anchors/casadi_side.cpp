@@ -9,6 +9,9 @@
 // build (SX expression + code generation + compile), getrusage(RUSAGE_CHILDREN) there the
 // compiler's peak memory; a build over the cap is stopped and reported. Jacobians are in
 // the tangent space, as CppADCodeGen's: q enters as integrate(q, dq), called at dq = 0.
+// The step rows (step_rows.hpp; CodegenOptions::step_rows: fixed base, nq = nv) are the
+// same step and cost on SX; not step_cost_derivatives, whose exact Hessian the check,
+// comparing Gauss-Newton Hessians, cannot take.
 #include <dlfcn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,6 +24,7 @@
 #include "anchors.hpp"
 #include "casadi_codegen.hpp"
 #include "child_build.hpp"
+#include "step_rows.hpp"
 
 namespace anchors {
 namespace {
@@ -32,8 +36,27 @@ using robodiff::cli::bench::secondsPerCall;
 // The CasADi rows: the four of `robodiff bench`.
 const std::vector<std::string> kCasadiRows = {"rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"};
 
-bool casadiRowHasJacobian(const std::string& row) { return row == "rnea_jacobian_dense" || row == "aba_jacobian"; }
-bool casadiRowIsAba(const std::string& row) { return row.rfind("aba", 0) == 0; }
+const std::vector<std::string> kCasadiStepRows = {"euler_step_value", "euler_step_jacobian", "step_cost_value"};
+
+bool casadiRowHasJacobian(const std::string& row) {
+  return row == "rnea_jacobian_dense" || row == "aba_jacobian" || row == "euler_step_jacobian";
+}
+bool casadiRowIsStep(const std::string& row) { return row.rfind("euler_step", 0) == 0 || row.rfind("step_cost", 0) == 0; }
+// Rows whose last input is tau (not a).
+bool casadiRowIsAba(const std::string& row) { return row.rfind("aba", 0) == 0 || casadiRowIsStep(row); }
+
+casadi_codegen::Algorithm casadiAlgorithmOf(const std::string& row) {
+  using casadi_codegen::Algorithm;
+  if (row == "step_cost_value") return Algorithm::step_cost;
+  if (casadiRowIsStep(row)) return Algorithm::euler_step;
+  return row.rfind("aba", 0) == 0 ? Algorithm::aba : Algorithm::rnea;
+}
+
+// Rows of the row's output y: nv, or the step's nq + nv (+ 1 with the cost).
+Eigen::Index casadiOutputSize(const std::string& row, const pinocchio::Model& m) {
+  if (!casadiRowIsStep(row)) return m.nv;
+  return m.nq + m.nv + (row == "step_cost_value" ? 1 : 0);
+}
 
 std::string casadiFunctionName(const std::string& row) { return "anchor_casadi_" + row; }
 fs::path casadiLibraryPath(const fs::path& dir, const std::string& row) {
@@ -48,6 +71,9 @@ casadi_codegen::Tree treeOf(const pinocchio::Model& model) {
   tree.inertias.assign(model.inertias.begin(), model.inertias.end());
   tree.armature = model.armature;
   tree.gravity = model.gravity;
+  const pinocchio::Frame& frame = model.frames[lastFrame(model)];
+  tree.frame_parent = frame.parentJoint;
+  tree.frame_placement = frame.placement;
   return tree;
 }
 
@@ -69,10 +95,13 @@ void runCompiler(const std::vector<std::string>& args, const std::string& source
 // In the build's child, in its directory: the C source, then the library.
 void generateAndCompileCasadi(const std::string& row, const casadi_codegen::Tree& tree) {
   const std::string name = casadiFunctionName(row), source = name + ".c";
-  const auto algorithm = casadiRowIsAba(row) ? casadi_codegen::Algorithm::aba : casadi_codegen::Algorithm::rnea;
+  casadi_codegen::StepParameters step;
+  step.dt = kStepDt;
+  step.control_weight = kControlWeight;
+  for (int k = 0; k < 3; ++k) step.target[k] = kCostTarget[static_cast<std::size_t>(k)];
   char error[512] = "";
-  if (!casadi_codegen::generateSource(tree, algorithm, casadiRowHasJacobian(row), name.c_str(), source.c_str(), error,
-                                      sizeof error))
+  if (!casadi_codegen::generateSource(tree, casadiAlgorithmOf(row), step, casadiRowHasJacobian(row), name.c_str(),
+                                      source.c_str(), error, sizeof error))
     throw std::runtime_error(error);
   runCompiler({"/usr/bin/gcc", "-O3", "-march=native", "-shared", "-fPIC", "-o", name + ".so", source, "-lm"}, source);
 }
@@ -115,8 +144,8 @@ struct CasadiLibrary {
   void bind(const std::string& row, const pinocchio::Model& m, const State& s) {
     const bool with_jacobian = casadiRowHasJacobian(row);
     q = s.q, dq = Eigen::VectorXd::Zero(m.nv), v = s.v, u = casadiRowIsAba(row) ? s.tau : s.a;
-    y.resize(m.nv);
-    jacobian.resize(with_jacobian ? m.nv : 0, with_jacobian ? 3 * m.nv : 0);
+    y.resize(casadiOutputSize(row, m));
+    jacobian.resize(with_jacobian ? y.size() : 0, with_jacobian ? 3 * m.nv : 0);
     std::vector<const double*> inputs = {q.data(), v.data(), u.data()};
     if (with_jacobian) inputs.insert(inputs.begin() + 1, dq.data());
     if (arg.size() < inputs.size() || res.size() < (with_jacobian ? 2u : 1u))
@@ -167,7 +196,9 @@ std::vector<RowResult> runCasadi(const pinocchio::Model& model, const State& tim
                                  const Timing& plan, const CodegenOptions& options) {
   const casadi_codegen::Tree tree = treeOf(model);
   std::vector<RowResult> rows;
-  for (const std::string& row : kCasadiRows) {
+  std::vector<std::string> names = kCasadiRows;
+  if (options.step_rows) names.insert(names.end(), kCasadiStepRows.begin(), kCasadiStepRows.end());
+  for (const std::string& row : names) {
     if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), row) == options.only.end()) {
       RowResult skipped;
       skipped.name = row, skipped.status = "skipped";

@@ -178,6 +178,7 @@ int run(const Args& a) {
   std::vector<anchors::RowResult> cas;
   if (a.casadi) {
     anchors::CodegenOptions options{a.workdir + "/casadi", a.cap, a.reuse, a.codegen_rows};
+    options.step_rows = !a.floating_base && model.nq == model.nv;
     cas = anchors::runCasadi(model, timed, checks, plan, options);
     checkAgainst(pin, cas);
   }
