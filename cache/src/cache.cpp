@@ -98,6 +98,10 @@ Cache Cache::open(const fs::path& dir, const CacheOptions& options) {
 const fs::path& Cache::dir() const { return state_->dir; }
 const CacheOptions& Cache::options() const { return state_->options; }
 
+void detail::recordPortableKey(sqlite3* db, const std::string& key, const EntryInfo& info) {
+  Statement(db, "UPDATE entries SET portable_key = ? WHERE key = ?").bind(1, info.portable_key).bind(2, key).run();
+}
+
 void detail::quarantineEntry(Cache::State& s, const std::string& key, const std::string& reason) {
   s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ? AND state = 'ready'").bind(1, key).run(); });
   const fs::path from = s.objectDir(key);
@@ -246,6 +250,7 @@ ClaimResult Cache::claim(const std::string& key, const EntryInfo& info) {
             .bind(10, c.owner)
             .bind(11, lease_end)
             .run();
+        recordPortableKey(s.db->handle(), key, info);
         if (row) removeTreeQuietly(s.stagingDir(Claim{key, row->owner}));
         result.state = ClaimResult::State::Claimed;
         result.claim = c;
@@ -429,6 +434,7 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
             .bind(12, now)
             .bind(13, now)
             .run();
+        recordPortableKey(s.db->handle(), claim.key, info);
       });
     }
     removeTreeQuietly(s.stagingDir(claim));

@@ -10,32 +10,41 @@
 
 namespace robodiff::cache {
 
-std::string BuildIdentity::canonicalText() const {
-  // Values may contain anything but newlines are escaped, so one field cannot imitate
-  // another.
-  auto line = [](std::ostringstream& s, const char* field, const std::string& value) {
-    s << field << '=';
-    for (char c : value) {
-      if (c == '\n') s << "\\n";
-      else if (c == '\\') s << "\\\\";
-      else s << c;
-    }
-    s << '\n';
-  };
+namespace {
+
+// One "field=value" line. Values may contain anything but newlines are escaped, so one
+// field cannot imitate another.
+void identityLine(std::ostringstream& s, const char* field, const std::string& value) {
+  s << field << '=';
+  for (char c : value) {
+    if (c == '\n') s << "\\n";
+    else if (c == '\\') s << "\\\\";
+    else s << c;
+  }
+  s << '\n';
+}
+
+// The identity's text, with or without the compiler line.
+std::string identityText(const BuildIdentity& id, bool with_compiler) {
   std::ostringstream s;
-  line(s, "format", "robodiff-cache-key 1");
-  line(s, "model", model_hash);
-  line(s, "spec", spec);
-  line(s, "generator", generator);
-  line(s, "compiler", compiler);
+  identityLine(s, "format", with_compiler ? "robodiff-cache-key 1" : "robodiff-portable-key 1");
+  identityLine(s, "model", id.model_hash);
+  identityLine(s, "spec", id.spec);
+  identityLine(s, "generator", id.generator);
+  if (with_compiler) identityLine(s, "compiler", id.compiler);
   std::string joined;
-  for (const std::string& f : flags) joined += f + '\x1f';
-  line(s, "flags", joined);
-  line(s, "target", target_cpu);
+  for (const std::string& f : id.flags) joined += f + '\x1f';
+  identityLine(s, "flags", joined);
+  identityLine(s, "target", id.target_cpu);
   return s.str();
 }
 
+}  // namespace
+
+std::string BuildIdentity::canonicalText() const { return identityText(*this, true); }
 std::string BuildIdentity::key() const { return sha256Hex(canonicalText()); }
+std::string BuildIdentity::portableText() const { return identityText(*this, false); }
+std::string BuildIdentity::portableKey() const { return sha256Hex(portableText()); }
 
 namespace {
 

@@ -62,6 +62,7 @@ void insertReadyRow(Cache::State& s, const Entry& e) {
         .bind(12, e.created)
         .bind(13, e.last_used)
         .run();
+    recordPortableKey(s.db->handle(), e.key, e.info);
   });
 }
 

@@ -42,6 +42,10 @@ std::string entryProblem(const Entry& e, const std::filesystem::path& dir);
 // Caller holds the mutex.
 void quarantineEntry(Cache::State& s, const std::string& key, const std::string& reason);
 
+// Sets the row's portable key (EntryInfo::portable_key); run in the transaction that
+// inserted the row.
+void recordPortableKey(sqlite3* db, const std::string& key, const EntryInfo& info);
+
 }  // namespace detail
 }  // namespace robodiff::cache
 

@@ -56,19 +56,13 @@ bool isEntryFileName(const std::string& name) {
 std::string manifestText(const EntryManifest& m) {
   json files = json::array();
   for (const ManifestFile& f : m.files) files.push_back({{"name", f.name}, {"size", f.size}, {"sha256", f.sha256}});
-  const json j = {{"format", kManifestFormat},
-                  {"key", m.key},
-                  {"entry",
-                   {{"model_hash", m.info.model_hash},
-                    {"robot", m.info.robot},
-                    {"function", m.info.function},
-                    {"spec", m.info.spec},
-                    {"sizes", m.info.sizes},
-                    {"compiler", m.info.compiler},
-                    {"build_seconds", m.info.build_seconds}}},
-                  {"files", files},
-                  {"signer", m.signer},
-                  {"signed_at", m.signed_at}};
+  json entry = {{"model_hash", m.info.model_hash}, {"robot", m.info.robot},   {"function", m.info.function},
+                {"spec", m.info.spec},             {"sizes", m.info.sizes},   {"compiler", m.info.compiler},
+                {"build_seconds", m.info.build_seconds}};
+  // Signed with the rest; absent for entries that have none (older ones).
+  if (!m.info.portable_key.empty()) entry["portable_key"] = m.info.portable_key;
+  const json j = {{"format", kManifestFormat}, {"key", m.key},       {"entry", entry},
+                  {"files", files},            {"signer", m.signer}, {"signed_at", m.signed_at}};
   return j.dump();  // nlohmann's objects keep their keys sorted: canonical and compact
 }
 
@@ -92,6 +86,7 @@ EntryManifest parseManifest(const std::string& text) {
   m.info.sizes = field<std::string>(entry, "sizes", "manifest.json entry");
   m.info.compiler = field<std::string>(entry, "compiler", "manifest.json entry");
   m.info.build_seconds = field<double>(entry, "build_seconds", "manifest.json entry");
+  if (entry.contains("portable_key")) m.info.portable_key = field<std::string>(entry, "portable_key", "manifest.json entry");
   const json files = field<json>(j, "files", "manifest.json");
   if (!files.is_array()) throw std::runtime_error("manifest.json: \"files\" is not an array");
   std::set<std::string> seen;

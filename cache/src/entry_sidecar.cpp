@@ -34,6 +34,7 @@ std::string sidecarText(const Entry& e) {
                             {"spec", e.info.spec},
                             {"sizes", e.info.sizes},
                             {"compiler", e.info.compiler},
+                            {"portable_key", e.info.portable_key},
                             {"build_seconds", e.info.build_seconds},
                             {"library_bytes", e.library_bytes},
                             {"library_sha256", e.library_sha256},
@@ -66,6 +67,8 @@ Entry readSidecar(const std::filesystem::path& file) {
   e.info.sizes = field<std::string>(j, "sizes", file);
   e.info.compiler = field<std::string>(j, "compiler", file);
   e.info.build_seconds = field<double>(j, "build_seconds", file);
+  // Absent from entries written before it was recorded.
+  if (const auto it = j.find("portable_key"); it != j.end() && it->is_string()) e.info.portable_key = it->get<std::string>();
   e.library_bytes = field<std::uint64_t>(j, "library_bytes", file);
   e.library_sha256 = field<std::string>(j, "library_sha256", file);
   e.created = field<std::int64_t>(j, "created", file);

@@ -50,10 +50,9 @@ std::string spaceSeparated(const std::vector<std::string>& words) {
   return text;
 }
 
-}  // namespace
-
-PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,
-                           const std::string& function_name, const std::string& compiler) {
+// Everything prepareBuild prepares but the compiler's identity (which needs the compiler).
+PreparedBuild prepareWithoutCompiler(const std::string& model_hash, const FunctionSpec& spec,
+                                     const std::string& function_name, const std::string& compiler) {
   PreparedBuild p;
   if (!function_name.empty()) p.options.builder.name = function_name;
   p.options.compiler.compiler = compiler;
@@ -61,18 +60,31 @@ PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, co
   // The C name buildFunction gives the function.
   const std::string c_name = function_name.empty() ? spec.functionName() : function_name;
   const codegen::CompilerOptions effective = compilerOptionsFor(spec.build, p.options.compiler);
-
   p.identity.model_hash = model_hash;
   p.identity.spec = normalizedSpecJson(spec);
   p.identity.generator = generatorIdentity(p.options, c_name);
-  p.identity.compiler = cachedCompilerIdentity(effective);
   p.identity.flags = codegen::compilerFlags(effective);
   p.identity.target_cpu = targetCpuIdentity(spec.build.march_native, spec.build.target);
+  p.info.function = c_name;
+  p.info.portable_key = p.identity.portableKey();
+  return p;
+}
+
+}  // namespace
+
+std::string preparePortableKey(const std::string& model_hash, const FunctionSpec& spec,
+                               const std::string& function_name) {
+  return prepareWithoutCompiler(model_hash, spec, function_name, "").info.portable_key;
+}
+
+PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,
+                           const std::string& function_name, const std::string& compiler) {
+  PreparedBuild p = prepareWithoutCompiler(model_hash, spec, function_name, compiler);
+  p.identity.compiler = cachedCompilerIdentity(compilerOptionsFor(spec.build, p.options.compiler));
   p.key = p.identity.key();
 
   p.info.model_hash = model_hash;
   p.info.robot = model.name;
-  p.info.function = c_name;
   p.info.spec = p.identity.spec;
   p.info.compiler = p.identity.compiler + " " + spaceSeparated(p.identity.flags) +
                     " target=" + targetLabel(spec.build.march_native, spec.build.target);

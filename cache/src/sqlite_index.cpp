@@ -87,14 +87,21 @@ CREATE TABLE IF NOT EXISTS entries (
   last_used        INTEGER NOT NULL DEFAULT 0,
   hits             INTEGER NOT NULL DEFAULT 0,
   owner            TEXT NOT NULL DEFAULT '',
-  lease_expires_ms INTEGER NOT NULL DEFAULT 0
+  lease_expires_ms INTEGER NOT NULL DEFAULT 0,
+  portable_key     TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS entries_by_use ON entries (state, last_used);
 )sql";
 
+// Indexes on columns that indexes made by earlier versions lack (added by addMissingColumns
+// first).
+constexpr const char* kLaterIndexes = R"sql(
+CREATE INDEX IF NOT EXISTS entries_by_portable_key ON entries (portable_key);
+)sql";
+
 constexpr const char* kColumns =
     "key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, library_bytes, total_bytes, "
-    "library_sha256, created, last_used, hits, owner, lease_expires_ms";
+    "library_sha256, created, last_used, hits, owner, lease_expires_ms, portable_key";
 
 Entry readEntry(const Statement& s) {
   Entry e;
@@ -115,7 +122,21 @@ Entry readEntry(const Statement& s) {
   e.hits = static_cast<std::uint64_t>(s.integer(14));
   e.owner = s.text(15);
   e.lease_expires_ms = s.integer(16);
+  e.info.portable_key = s.text(17);
   return e;
+}
+
+// Columns added since the first schema, added to an index an earlier version made.
+void addMissingColumns(sqlite3* db) {
+  bool has_portable_key = false;
+  {
+    Statement columns(db, "PRAGMA table_info(entries)");  // finalised before the ALTER
+    while (columns.step()) has_portable_key = has_portable_key || columns.text(1) == "portable_key";
+  }
+  if (has_portable_key) return;
+  checkSqlite(db, sqlite3_exec(db, "ALTER TABLE entries ADD COLUMN portable_key TEXT NOT NULL DEFAULT ''", nullptr,
+                               nullptr, nullptr),
+              "adding the portable_key column");
 }
 
 }  // namespace
@@ -157,7 +178,11 @@ IndexDatabase::IndexDatabase(const std::filesystem::path& file, std::chrono::mil
     // artifacts themselves are fsynced before they are indexed).
     exec("PRAGMA journal_mode=WAL");
     exec("PRAGMA synchronous=NORMAL");
-    immediate([&] { exec(kSchema); });
+    immediate([&] {
+      exec(kSchema);
+      addMissingColumns(db_);
+      exec(kLaterIndexes);
+    });
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;

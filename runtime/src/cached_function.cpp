@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "robodiff/runtime/target_check.hpp"
+#include "robodiff/cache/target_check.hpp"
 
 namespace robodiff::runtime {
 namespace {
@@ -34,7 +34,7 @@ void expectSizes(const std::string& sizes_json, codegen::FunctionExpectations& e
 
 codegen::CompiledFunction openCachedFunction(const cache::Artifact& artifact, const FunctionSpec& spec) {
   // Before dlopen: a library for another CPU is refused, not run into SIGILL.
-  if (const std::string problem = targetProblem(artifact.entry().info.compiler); !problem.empty())
+  if (const std::string problem = cache::targetProblem(artifact.entry().info.compiler); !problem.empty())
     throw codegen::LoadError("cache entry " + artifact.entry().key + " cannot run on this CPU: " + problem);
   const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(artifact.library());
   codegen::FunctionExpectations expected;

@@ -1,6 +1,7 @@
 // The three ways to evaluate give the same answers and the same statuses: Local (the
 // cached library in this process), Shm and Dds (robodiffd), checked against core/dynamics.
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -152,6 +153,28 @@ TEST(ClientModes, LocalWithoutAServerUsesTheCache) {
     EXPECT_NE(e.status().message.find("robodiff warmup"), std::string::npos) << e.what();
   }
   EXPECT_THROW(local.health(), ClientError);
+}
+
+// A host without the build host's compiler (a robot that imported the library): the full
+// key cannot be computed, the portable key finds the library.
+TEST(ClientModes, LocalWithoutACompilerFindsTheLibraryByItsPortableKey) {
+  SharedServer& shared = SharedServer::get();
+  client::ClientOptions options = shared.server().options(Mode::Local);
+  options.server.shm_service = "robodiff-nobody-" + std::to_string(::getpid());
+  options.server.dds_domain = (testDomain() + 100) % 230;  // no server there
+  const char* cc = std::getenv("CC");
+  const std::string saved = cc ? cc : "";
+  ::setenv("CC", "/nonexistent/cc", 1);
+  Client local(options);
+  const client::ModelInfo m = local.loadModel(arm7Text());
+  client::Function f = local.function(m, kRneaJacobianSpec);
+  if (cc) ::setenv("CC", saved.c_str(), 1);
+  else ::unsetenv("CC");
+  EXPECT_EQ(f.mode(), Mode::Local);
+  const RneaReference ref = RneaReference::at(shared.model(), 22);
+  std::vector<double> out = outputsFor(f);
+  ASSERT_TRUE(f.evaluate(spanOf(ref.inputs), out).ok());
+  EXPECT_TRUE(ref.matches(out));
 }
 
 TEST(ClientModes, AnInsistedModeThatCannotBeReachedIsUnavailable) {

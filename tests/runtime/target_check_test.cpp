@@ -1,7 +1,7 @@
-// The loader's CPU check (runtime/target_check.hpp): a cached library for an x86-64 level
+// The loader's CPU check (cache/target_check.hpp, applied by runtime's openCachedFunction): a cached library for an x86-64 level
 // this CPU lacks, or built with -march=native on another CPU, is refused before dlopen.
 // The levels are checked against /proc/cpuinfo's flags, a second source.
-#include "robodiff/runtime/target_check.hpp"
+#include "robodiff/cache/target_check.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +17,9 @@
 
 namespace robodiff::runtime {
 namespace {
+
+using cache::cpuSupportsLevel;
+using cache::targetProblem;
 
 std::set<std::string> cpuinfoFlags() {
   std::ifstream f("/proc/cpuinfo");

@@ -102,7 +102,10 @@ struct Function::Impl {
   std::unique_ptr<detail::LocalEvaluator> local_owner;
   // Not local yet but may become so: the cache is looked at again at most every 100 ms.
   bool local_candidate = false;
-  std::string key;  // the cache key (empty: unknown, never local)
+  std::string key;  // the cache key (empty: unknown, e.g. no compiler here)
+  // The portable key (cache_key.hpp): finds a library built elsewhere (imported), with
+  // another compiler or none here. Both empty: never local.
+  std::string portable_key;
   std::atomic<std::int64_t> next_check_ns{0};
   std::mutex switch_mutex;
 

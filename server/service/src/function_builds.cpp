@@ -161,6 +161,9 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
       cache_misses_.fetch_add(1, std::memory_order_relaxed);
     }
   }
+  // Built elsewhere (imported, or by another version of the compiler): found by its
+  // portable key, which needs no compiler, so a server that compiles nothing serves it too.
+  if (loadPortable(function)) return;
 
   const auto started = Clock::now();
   std::shared_ptr<const Evaluator> evaluator;
@@ -218,11 +221,25 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
 }
 
 bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key) {
+  return loadArtifact(function, "cache", [&] { return cache_.find(key); });
+}
+
+bool FunctionBuilds::loadPortable(const std::shared_ptr<FunctionEntry>& function) {
+  const FunctionEntry& f = *function;
+  return loadArtifact(function, "cache by portable key", [&] {
+    return cache_.findPortable(cache::preparePortableKey(f.model().id, f.spec(), ""));
+  });
+}
+
+bool FunctionBuilds::loadArtifact(const std::shared_ptr<FunctionEntry>& function, const char* source,
+                                  const std::function<std::optional<cache::Artifact>()>& lookUp) {
   FunctionEntry& f = *function;
+  std::string key;
   try {
     const auto started = Clock::now();
-    const std::optional<cache::Artifact> artifact = cache_.find(key);
+    const std::optional<cache::Artifact> artifact = lookUp();
     if (!artifact) return false;
+    key = artifact->key();
     std::shared_ptr<const CompiledEvaluator> compiled = loadCompiled(*artifact, f.spec());
     cache_hits_.fetch_add(1, std::memory_order_relaxed);
     f.setCompileSeconds(secondsSince(started), true);
@@ -230,7 +247,7 @@ bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& functio
     f.setCompileStage(CompileStage::Compiled);
     f.ready(std::move(compiled));
     log_.info("function_loaded",
-              {{"function_id", f.id()}, {"function", f.functionName()}, {"key", key}, {"source", "cache"}});
+              {{"function_id", f.id()}, {"function", f.functionName()}, {"key", key}, {"source", source}});
     return true;
   } catch (const std::exception& e) {
     log_.warn("cache_entry_unusable", {{"function_id", f.id()}, {"key", key}, {"message", e.what()}});

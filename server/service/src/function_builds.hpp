@@ -98,7 +98,12 @@ class FunctionBuilds {
 
  private:
   void trace(const std::shared_ptr<FunctionEntry>& function);
+  // Serves `function` from a cached library (true), by its key or by its portable key
+  // (built elsewhere: cache::preparePortableKey needs no compiler).
   bool loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
+  bool loadPortable(const std::shared_ptr<FunctionEntry>& function);
+  bool loadArtifact(const std::shared_ptr<FunctionEntry>& function, const char* source,
+                    const std::function<std::optional<cache::Artifact>()>& lookUp);
   void compile(const std::shared_ptr<FunctionEntry>& function);
   void refill(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
   static workers::BuildTarget buildTarget(const FunctionEntry& function);

@@ -72,6 +72,9 @@ struct EntryInfo {
   std::string sizes;        // JSON: {"inputs": [...], "outputs": [...]} block sizes
   std::string compiler;     // identity and flags
   double build_seconds = 0;
+  // BuildIdentity::portableKey(): how a host without this compiler finds the entry
+  // (Cache::findPortable). Empty for entries made before it was recorded.
+  std::string portable_key;
 };
 
 // One row of the index.
@@ -183,6 +186,11 @@ class Cache {
   // found missing or corrupt (then quarantined and unindexed, so the caller rebuilds it).
   // Throws CacheError(Permissions) when its files are another user's or writable by others.
   std::optional<Artifact> find(const std::string& key);
+  // A verified artifact whose portable key (EntryInfo::portable_key) is `portable_key` and
+  // whose target this CPU can run (target_check.hpp), the most recently used first, as
+  // find() returns it; nullopt when there is none. How a host without the build host's
+  // compiler finds a library it imported or fetched (cache_portable.cpp).
+  std::optional<Artifact> findPortable(const std::string& portable_key);
 
   // Ready artifact, or a claim for this process, or Busy. A claim whose lease ran out or
   // whose owner is dead is taken over. `info` is recorded with the claim.

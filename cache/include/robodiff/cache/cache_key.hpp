@@ -23,6 +23,13 @@ struct BuildIdentity {
   // The text that is hashed: one "field=value" line per field, in a fixed order.
   std::string canonicalText() const;
   std::string key() const;  // lowercase hex SHA-256 of canonicalText()
+
+  // The same without the compiler's identity: what a host that has no compiler, or
+  // another version of it, can compute for the same function, model, flags and target
+  // (a robot asking for a library built elsewhere). Two libraries with one portable key
+  // compute the same function for the same CPUs; they may differ in their bytes.
+  std::string portableText() const;
+  std::string portableKey() const;  // lowercase hex SHA-256 of portableText()
 };
 
 // What the generated code may assume about the CPU. For a native build: the machine

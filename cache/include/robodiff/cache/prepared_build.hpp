@@ -30,4 +30,9 @@ struct PreparedBuild {
 PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,
                            const std::string& function_name, const std::string& compiler);
 
+// The portable key (BuildIdentity::portableKey) of what prepareBuild would prepare, without
+// running a compiler: what a host that has none looks an imported or fetched library up by.
+std::string preparePortableKey(const std::string& model_hash, const FunctionSpec& spec,
+                               const std::string& function_name);
+
 }  // namespace robodiff::cache

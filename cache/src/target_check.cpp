@@ -1,8 +1,8 @@
-#include "robodiff/runtime/target_check.hpp"
+#include "robodiff/cache/target_check.hpp"
 
 #include "robodiff/cache/cache_key.hpp"
 
-namespace robodiff::runtime {
+namespace robodiff::cache {
 
 bool cpuSupportsLevel(const std::string& level) {
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
@@ -23,8 +23,8 @@ std::string targetProblem(const std::string& entry_compiler) {
   const std::string label = entry_compiler.substr(at + marker.size());
   if (label == "generic") return {};
   if (label.rfind("native:", 0) == 0) {
-    if (label == cache::targetLabel(true)) return {};
-    return "it was built with -march=native on another CPU (" + label + "; this CPU is " + cache::targetLabel(true) +
+    if (label == targetLabel(true)) return {};
+    return "it was built with -march=native on another CPU (" + label + "; this CPU is " + targetLabel(true) +
            ")";
   }
   if (label.rfind("x86-64-v", 0) == 0) {
@@ -34,4 +34,4 @@ std::string targetProblem(const std::string& entry_compiler) {
   return "it was built for an unknown target '" + label + "'";
 }
 
-}  // namespace robodiff::runtime
+}  // namespace robodiff::cache

@@ -6,7 +6,7 @@
 
 #include <string>
 
-namespace robodiff::runtime {
+namespace robodiff::cache {
 
 // The problem ("built for x86-64-v4, which this CPU does not support"), or empty when the
 // library may run here. An entry that records no target (made before targets were
@@ -16,4 +16,4 @@ std::string targetProblem(const std::string& entry_compiler);
 // True when this CPU supports the x86-64 level ("x86-64-v2" .. "x86-64-v4").
 bool cpuSupportsLevel(const std::string& level);
 
-}  // namespace robodiff::runtime
+}  // namespace robodiff::cache
