@@ -116,6 +116,7 @@ TEST(PortableKey, IsKeptByEntryJsonAndTheSignedManifest) {
   EntryManifest m;
   m.key = keyOf("kept");
   m.info = infoFor("kept");
+  m.files = {{"description.json", 2, sha256Hex("{}")}, {"library.so", 3, sha256Hex("lib")}};
   m.info.portable_key = pk;
   EXPECT_EQ(parseManifest(manifestText(m)).info.portable_key, pk);
   m.info.portable_key.clear();  // a manifest from before: no field, and it still parses

@@ -87,7 +87,7 @@ json parseObject(const std::string& text, const std::string& what) {
 json toJson(const cache::EntryInfo& info) {
   return {{"model_hash", info.model_hash}, {"robot", info.robot},       {"function", info.function},
           {"spec", info.spec},             {"sizes", info.sizes},       {"compiler", info.compiler},
-          {"build_seconds", info.build_seconds}};
+          {"build_seconds", info.build_seconds}, {"portable_key", info.portable_key}};
 }
 
 cache::EntryInfo entryInfoFromJson(const json& j, const std::string& where) {
@@ -100,6 +100,7 @@ cache::EntryInfo entryInfoFromJson(const json& j, const std::string& where) {
   f.optional("sizes", info.sizes);
   f.optional("compiler", info.compiler);
   f.optional("build_seconds", info.build_seconds);
+  f.optional("portable_key", info.portable_key);
   return info;
 }
 
@@ -280,6 +281,7 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
     if (info.function.empty()) info.function = known.function;
     if (info.spec.empty()) info.spec = known.spec;
     if (info.compiler.empty()) info.compiler = known.compiler;
+    info.portable_key = known.portable_key;  // from the identity this worker checked the key against
     info.sizes = blockSizes(generated.built.definition);
     info.build_seconds = std::chrono::duration<double>(Clock::now() - started).count();
     cache::ArtifactFiles files;
