@@ -28,6 +28,7 @@ TEST(PortableCache, AServerWithoutACompilerServesALibraryBuiltElsewhere) {
     const rpc::GetFunctionReply f = readyFunction(*robot, model.model_id, kRneaJacobianSpec);
     EXPECT_TRUE(summaryOf(*robot, f.function_id).compiled) << summaryOf(*robot, f.function_id).message;
     EXPECT_EQ(health(*robot).cache_hits, 1u);
+    EXPECT_EQ(health(*robot).cache_misses, 0u);
     EXPECT_TRUE(closeTo(evaluateOnce(*robot, f, x), expected, 0.0));  // the same library, the same bits
     // Another function, in no cache: the interpreter serves it.
     const rpc::GetFunctionReply other = readyFunction(*robot, model.model_id, kRneaValueSpec);

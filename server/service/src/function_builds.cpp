@@ -156,14 +156,12 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
     } catch (const std::exception& e) {
       key_problem = e.what();  // e.g. the compiler cannot be run: the interpreter serves
     }
-    if (prepared) {
-      if (loadFromCache(function, prepared->key)) return;
-      cache_misses_.fetch_add(1, std::memory_order_relaxed);
-    }
+    if (prepared && loadFromCache(function, prepared->key)) return;
   }
   // Built elsewhere (imported, or by another version of the compiler): found by its
   // portable key, which needs no compiler, so a server that compiles nothing serves it too.
   if (loadPortable(function)) return;
+  if (settings_.compile && key_problem.empty()) cache_misses_.fetch_add(1, std::memory_order_relaxed);
 
   const auto started = Clock::now();
   std::shared_ptr<const Evaluator> evaluator;
