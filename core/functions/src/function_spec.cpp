@@ -291,8 +291,11 @@ class Parser {
     const std::string target = string(b["target"], "build.target");
     const bool level = std::find_if(std::begin(kTargetLevels), std::end(kTargetLevels),
                                     [&](const char* l) { return target == l; }) != std::end(kTargetLevels);
-    if (!level && target != "native" && target != "x86-64")
-      fail("build.target", language::quote(target) + " is not one of native, x86-64, x86-64-v2, x86-64-v3, x86-64-v4");
+    if (!level && target != "native" && target != "x86-64") {
+      std::string valid = "native, x86-64";
+      for (const char* l : kTargetLevels) valid += std::string(", ") + l;
+      fail("build.target", language::quote(target) + " is not one of " + valid);
+    }
     const bool native = target == "native";
     if (b.contains("march_native") && build.march_native != native)
       fail("build.march_native", std::string(build.march_native ? "true" : "false") + " contradicts target " +
