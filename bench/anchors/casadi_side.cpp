@@ -36,25 +36,22 @@ using robodiff::cli::bench::secondsPerCall;
 // The CasADi rows: the four of `robodiff bench`.
 const std::vector<std::string> kCasadiRows = {"rnea_value", "rnea_jacobian_dense", "aba_value", "aba_jacobian"};
 
-const std::vector<std::string> kCasadiStepRows = {"euler_step_value", "euler_step_jacobian", "step_cost_value"};
-
 bool casadiRowHasJacobian(const std::string& row) {
   return row == "rnea_jacobian_dense" || row == "aba_jacobian" || row == "euler_step_jacobian";
 }
-bool casadiRowIsStep(const std::string& row) { return row.rfind("euler_step", 0) == 0 || row.rfind("step_cost", 0) == 0; }
 // Rows whose last input is tau (not a).
-bool casadiRowIsAba(const std::string& row) { return row.rfind("aba", 0) == 0 || casadiRowIsStep(row); }
+bool casadiRowIsAba(const std::string& row) { return row.rfind("aba", 0) == 0 || isStepRow(row); }
 
 casadi_codegen::Algorithm casadiAlgorithmOf(const std::string& row) {
   using casadi_codegen::Algorithm;
   if (row == "step_cost_value") return Algorithm::step_cost;
-  if (casadiRowIsStep(row)) return Algorithm::euler_step;
+  if (isStepRow(row)) return Algorithm::euler_step;
   return row.rfind("aba", 0) == 0 ? Algorithm::aba : Algorithm::rnea;
 }
 
 // Rows of the row's output y: nv, or the step's nq + nv (+ 1 with the cost).
 Eigen::Index casadiOutputSize(const std::string& row, const pinocchio::Model& m) {
-  if (!casadiRowIsStep(row)) return m.nv;
+  if (!isStepRow(row)) return m.nv;
   return m.nq + m.nv + (row == "step_cost_value" ? 1 : 0);
 }
 
@@ -197,7 +194,7 @@ std::vector<RowResult> runCasadi(const pinocchio::Model& model, const State& tim
   const casadi_codegen::Tree tree = treeOf(model);
   std::vector<RowResult> rows;
   std::vector<std::string> names = kCasadiRows;
-  if (options.step_rows) names.insert(names.end(), kCasadiStepRows.begin(), kCasadiStepRows.end());
+  if (options.step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
   for (const std::string& row : names) {
     if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), row) == options.only.end()) {
       RowResult skipped;

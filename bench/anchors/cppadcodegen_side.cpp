@@ -46,8 +46,6 @@ using ADS = CppAD::AD<CGD>;
 using ADVec = Eigen::Matrix<ADS, Eigen::Dynamic, 1>;
 using ADMat = Eigen::Matrix<ADS, Eigen::Dynamic, Eigen::Dynamic>;
 
-bool isStepRow(const std::string& row) { return row.rfind("euler_step", 0) == 0 || row.rfind("step_cost", 0) == 0; }
-
 // What a row's library takes and gives.
 struct CodegenShape {
   bool jacobian = false;   // value + Jacobian over [dq, v, a|tau] (inputs [q, dq, v, a|tau])
@@ -205,7 +203,7 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
                                        const CodegenOptions& options) {
   std::vector<RowResult> rows;
   std::vector<std::string> names = kRows;
-  if (options.step_rows) names.insert(names.end(), {"euler_step_value", "euler_step_jacobian", "step_cost_value"});
+  if (options.step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
   for (const std::string& name : names) {
     RowResult r;
     r.name = name;

@@ -168,17 +168,19 @@ int run(const Args& a) {
     croc = anchors::runCrocoddyl(model, timed, checks, plan);
     checkAgainst(pin, croc);
   }
+  // The generated-code anchors tape the step where q_next's coordinates are its tangent.
+  const bool generated_step_rows = !a.floating_base && model.nq == model.nv;
   std::vector<anchors::RowResult> cg;
   if (a.codegen) {
     anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
-    options.step_rows = !a.floating_base && model.nq == model.nv;
+    options.step_rows = generated_step_rows;
     cg = anchors::runCppADCodeGen(model, timed, checks, plan, options);
     checkAgainst(pin, cg);
   }
   std::vector<anchors::RowResult> cas;
   if (a.casadi) {
     anchors::CodegenOptions options{a.workdir + "/casadi", a.cap, a.reuse, a.codegen_rows};
-    options.step_rows = !a.floating_base && model.nq == model.nv;
+    options.step_rows = generated_step_rows;
     cas = anchors::runCasadi(model, timed, checks, plan, options);
     checkAgainst(pin, cas);
   }

@@ -25,6 +25,14 @@ constexpr std::array<double, 3> kCostTarget = {0.4, 0.1, 0.5};
 
 // The rows, in order (value, then derivative rows).
 extern const std::vector<std::string> kStepRows;
+// The step rows the generated-code anchors (CppADCodeGen, CasADi) build: all but
+// step_cost_derivatives, whose exact Hessian the check (Gauss-Newton Hessians) cannot take.
+inline const std::vector<std::string> kGeneratedStepRows = {"euler_step_value", "euler_step_jacobian",
+                                                            "step_cost_value"};
+
+inline bool isStepRow(const std::string& row) {
+  return row.rfind("euler_step", 0) == 0 || row.rfind("step_cost", 0) == 0;
+}
 
 // Pinocchio: aba / computeABADerivatives, dIntegrate, the frame's Jacobian, composed by
 // hand on one preallocated Data. Fixed-base models only (the caller checks).
