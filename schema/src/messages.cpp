@@ -16,6 +16,9 @@ static_assert(static_cast<std::uint32_t>(Method::SubmitJob) == robodiff_wire_MET
 static_assert(static_cast<std::uint32_t>(Method::JobStatus) == robodiff_wire_METHOD_JOB_STATUS);
 static_assert(static_cast<std::uint32_t>(Method::CancelJob) == robodiff_wire_METHOD_CANCEL_JOB);
 static_assert(static_cast<std::uint32_t>(Method::JobResult) == robodiff_wire_METHOD_JOB_RESULT);
+static_assert(static_cast<std::uint32_t>(Method::QueryArtifact) == robodiff_wire_METHOD_QUERY_ARTIFACT);
+static_assert(static_cast<std::uint32_t>(Method::FetchArtifactChunk) == robodiff_wire_METHOD_FETCH_ARTIFACT_CHUNK);
+static_assert(static_cast<std::uint32_t>(Method::FleetStatus) == robodiff_wire_METHOD_FLEET_STATUS);
 static_assert(static_cast<std::uint32_t>(JobState::Queued) == robodiff_wire_JOB_QUEUED);
 static_assert(static_cast<std::uint32_t>(JobState::Cancelled) == robodiff_wire_JOB_CANCELLED);
 static_assert(static_cast<std::uint32_t>(FunctionState::Ready) == robodiff_wire_FUNCTION_READY);
@@ -24,6 +27,10 @@ static_assert(static_cast<std::uint32_t>(FunctionState::Failed) == robodiff_wire
 static_assert(static_cast<std::uint32_t>(OutputKind::Hessian) == robodiff_wire_OUTPUT_HESSIAN);
 static_assert(static_cast<std::uint32_t>(OutputLayout::SparseCsr) == robodiff_wire_LAYOUT_SPARSE_CSR);
 static_assert(static_cast<std::uint32_t>(ServingState::Draining) == robodiff_wire_SERVING_DRAINING);
+static_assert(static_cast<std::uint32_t>(ArtifactState::Have) == robodiff_wire_ARTIFACT_HAVE);
+static_assert(static_cast<std::uint32_t>(ArtifactState::Building) == robodiff_wire_ARTIFACT_BUILDING);
+static_assert(static_cast<std::uint32_t>(ArtifactState::Lack) == robodiff_wire_ARTIFACT_LACK);
+static_assert(static_cast<std::uint32_t>(ArtifactState::Failed) == robodiff_wire_ARTIFACT_FAILED);
 
 const char* toString(Method method) {
   switch (method) {
@@ -38,6 +45,9 @@ const char* toString(Method method) {
     case Method::JobStatus: return "JobStatus";
     case Method::CancelJob: return "CancelJob";
     case Method::JobResult: return "JobResult";
+    case Method::QueryArtifact: return "QueryArtifact";
+    case Method::FetchArtifactChunk: return "FetchArtifactChunk";
+    case Method::FleetStatus: return "FleetStatus";
   }
   return "UnknownMethod";
 }
@@ -58,6 +68,16 @@ const char* toString(FunctionState state) {
     case FunctionState::Ready: return "READY";
     case FunctionState::Building: return "BUILDING";
     case FunctionState::Failed: return "FAILED";
+  }
+  return "UNKNOWN_STATE";
+}
+
+const char* toString(ArtifactState state) {
+  switch (state) {
+    case ArtifactState::Have: return "HAVE";
+    case ArtifactState::Building: return "BUILDING";
+    case ArtifactState::Lack: return "LACK";
+    case ArtifactState::Failed: return "FAILED";
   }
   return "UNKNOWN_STATE";
 }

@@ -153,6 +153,18 @@ TEST(ClientModes, LocalWithoutAServerUsesTheCache) {
     EXPECT_NE(e.status().message.find("robodiff warmup"), std::string::npos) << e.what();
   }
   EXPECT_THROW(local.health(), ClientError);
+  EXPECT_THROW(local.fleetStatus(), ClientError);
+}
+
+// FleetStatus over either transport: the test server is in no fleet.
+TEST(ClientModes, FleetStatusComesFromTheServer) {
+  SharedServer& shared = SharedServer::get();
+  for (Mode mode : {Mode::Shm, Mode::Dds}) {
+    Client c(shared.server().options(mode));
+    const rpc::FleetStatusReply reply = c.fleetStatus();
+    EXPECT_EQ(reply.fleet.role, "standalone") << client::toString(mode);
+    EXPECT_TRUE(reply.fleet.peers.empty()) << client::toString(mode);
+  }
 }
 
 // A host without the build host's compiler (a robot that imported the library): the full

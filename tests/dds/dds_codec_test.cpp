@@ -254,11 +254,124 @@ TEST(DdsCodec, JobMessagesBothWays) {
   EXPECT_EQ(r.result_dir, "/var/cache/robodiff/jobs/job-5");
 }
 
+// Bytes as they come out of a file: zeros, 0xff, every value between.
+std::vector<std::uint8_t> ddsCodecTestBytes() {
+  std::vector<std::uint8_t> bytes = {0x00, 0xff, 0x00, 0x00, 0x7f, 0x80, 0xff};
+  for (int i = 0; i < 256; ++i) bytes.push_back(static_cast<std::uint8_t>(255 - i));
+  return bytes;
+}
+
+TEST(DdsCodec, ArtifactMessagesBothWays) {
+  const auto query = viaRequest(rpc::QueryArtifactRequest{"pk-1", "<robot name=\"a\"/>", true,
+                                                          R"({"build": {"target": "x86-64-v3"}})", true, false});
+  EXPECT_EQ(query.portable_key, "pk-1");
+  EXPECT_EQ(query.urdf, "<robot name=\"a\"/>");
+  EXPECT_TRUE(query.floating_base);
+  EXPECT_EQ(query.spec_json, R"({"build": {"target": "x86-64-v3"}})");
+  EXPECT_TRUE(query.build);
+  EXPECT_FALSE(query.include_sources);
+
+  const auto have = viaReply(rpc::QueryArtifactReply{rpc::ArtifactState::Have, "key-9", R"({"files": []})",
+                                                     std::string(128, 'a'), 1ull << 33, 4, "none"});
+  EXPECT_EQ(have.state, rpc::ArtifactState::Have);
+  EXPECT_EQ(have.key, "key-9");
+  EXPECT_EQ(have.manifest_json, R"({"files": []})");
+  EXPECT_EQ(have.signature_hex, std::string(128, 'a'));
+  EXPECT_EQ(have.payload_bytes, 1ull << 33);
+  EXPECT_EQ(have.builds_queued, 4u);
+  EXPECT_EQ(have.message, "none");
+  rpc::QueryArtifactReply failed;
+  failed.state = rpc::ArtifactState::Failed;
+  failed.message = "the compiler ran out of memory";
+  const auto failed_back = viaReply(failed);
+  EXPECT_EQ(failed_back.state, rpc::ArtifactState::Failed);
+  EXPECT_EQ(failed_back.message, "the compiler ran out of memory");
+
+  const auto fetch = viaRequest(rpc::FetchArtifactChunkRequest{"key-9", true, (1ull << 32) + 5, 65536});
+  EXPECT_EQ(fetch.key, "key-9");
+  EXPECT_TRUE(fetch.include_sources);
+  EXPECT_EQ(fetch.offset, (1ull << 32) + 5);
+  EXPECT_EQ(fetch.max_bytes, 65536u);
+
+  const std::vector<std::uint8_t> bytes = ddsCodecTestBytes();
+  const auto chunk = viaReply(rpc::FetchArtifactChunkReply{7, 263, bytes});
+  EXPECT_EQ(chunk.offset, 7u);
+  EXPECT_EQ(chunk.payload_bytes, 263u);
+  EXPECT_EQ(chunk.data, bytes);  // zeros do not end it, 0xff stays 0xff
+  const auto end = viaReply(rpc::FetchArtifactChunkReply{263, 263, {}});
+  EXPECT_TRUE(end.data.empty());
+  EXPECT_EQ(end.offset, 263u);
+}
+
+TEST(DdsCodec, ArtifactBytesAreAnOctetSequenceOnTheWire) {
+  WireReply sample;
+  toWire(ReplyBody(rpc::FetchArtifactChunkReply{0, 3, {0x00, 0xff, 0x01}}), sample->body);
+  EXPECT_EQ(sample->body._d, robodiff_wire_METHOD_FETCH_ARTIFACT_CHUNK);
+  const auto& data = sample->body._u.fetch_artifact_chunk.data;
+  ASSERT_EQ(data._length, 3u);
+  EXPECT_EQ(data._buffer[0], 0x00);
+  EXPECT_EQ(data._buffer[1], 0xff);
+  EXPECT_EQ(data._buffer[2], 0x01);
+  EXPECT_TRUE(data._release);  // owned by the sample, freed with it
+}
+
+TEST(DdsCodec, FleetStatusBothWays) {
+  EXPECT_TRUE(viaRequest(rpc::FleetStatusRequest{true}).verbose);
+  rpc::FleetStatusReply in;
+  in.fleet = {"robot", "x86-64-v3", 11, 1ull << 35, 2, 3, 0, 0, 0, {}};
+  in.fleet.peers = {{"build-a", "robodiffd-1", true, 10, 1ull << 34, 1, 0, "signature by an untrusted key"},
+                    {"build-b", "", false, 0, 0, 0, 5, "no answer within 2 s"}};
+  const rpc::FleetFigures f = viaReply(in).fleet;
+  EXPECT_EQ(f.role, "robot");
+  EXPECT_EQ(f.target, "x86-64-v3");
+  EXPECT_EQ(f.artifacts_fetched, 11u);
+  EXPECT_EQ(f.bytes_fetched, 1ull << 35);
+  EXPECT_EQ(f.artifacts_refused, 2u);
+  EXPECT_EQ(f.fetch_failures, 3u);
+  ASSERT_EQ(f.peers.size(), 2u);
+  EXPECT_EQ(f.peers[0].service, "build-a");
+  EXPECT_EQ(f.peers[0].instance_id, "robodiffd-1");
+  EXPECT_TRUE(f.peers[0].reachable);
+  EXPECT_EQ(f.peers[0].artifacts_fetched, 10u);
+  EXPECT_EQ(f.peers[0].bytes_fetched, 1ull << 34);
+  EXPECT_EQ(f.peers[0].refusals, 1u);
+  EXPECT_EQ(f.peers[0].last_problem, "signature by an untrusted key");
+  EXPECT_FALSE(f.peers[1].reachable);
+  EXPECT_EQ(f.peers[1].instance_id, "");
+  EXPECT_EQ(f.peers[1].failures, 5u);
+
+  rpc::FleetStatusReply build;
+  build.fleet.role = "build";
+  build.fleet.artifacts_served = 6;
+  build.fleet.bytes_served = 7;
+  build.fleet.builds_for_robots = 8;
+  const rpc::FleetFigures b = viaReply(build).fleet;
+  EXPECT_EQ(b.role, "build");
+  EXPECT_EQ(b.artifacts_served, 6u);
+  EXPECT_EQ(b.bytes_served, 7u);
+  EXPECT_EQ(b.builds_for_robots, 8u);
+  EXPECT_TRUE(b.peers.empty());
+}
+
 TEST(DdsCodec, DiscriminatorIsTheMethod) {
   WireRequest sample;
   toWire(RequestBody(rpc::ReleaseRequest{"x"}), sample->body);
   EXPECT_EQ(sample->body._d, robodiff_wire_METHOD_RELEASE);
   EXPECT_EQ(methodFromWire(sample->body._d), rpc::Method::Release);
+}
+
+// A non-OK reply's empty body is the method's own, for every method (a new one included).
+TEST(DdsCodec, EveryMethodsEmptyReplyCarriesItsDiscriminator) {
+  for (std::uint32_t m = 0; m < rpc::kMethodCount; ++m) {
+    const ReplyBody body = emptyReplyBody(static_cast<rpc::Method>(m));
+    EXPECT_EQ(body.index(), m) << rpc::toString(static_cast<rpc::Method>(m));
+    WireReply sample;
+    toWire(body, sample->body);
+    EXPECT_EQ(static_cast<std::uint32_t>(sample->body._d), m);
+    ReplyBody back;
+    ASSERT_TRUE(fromWire(sample->body, back).ok());
+    EXPECT_EQ(back.index(), m);
+  }
 }
 
 TEST(DdsCodec, UnknownDiscriminatorIsInvalidArgument) {

@@ -148,6 +148,44 @@ TEST_F(DdsTransport, EveryMethodRoundTrips) {
   EXPECT_EQ(methods, expected);
 }
 
+// The fleet methods: FleetStatus and QueryArtifact answered by ServiceApi's defaults, an
+// artifact's bytes (zeros and 0xff among them) fetched chunk by chunk and put back together.
+TEST_F(DdsTransport, FleetMethodsRoundTrip) {
+  FakeService service("srv-fleet");
+  auto server = startServer(service, serverOptions());
+  DdsConnection connection(clientOptions());
+
+  const rpc::FleetStatusRequest status_request;
+  rpc::FleetStatusReply status;
+  Status s = connection.call(client::UnaryCall{client::FleetStatusCall{&status_request, &status}}, {});
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_EQ(status.fleet.role, "standalone");
+  EXPECT_TRUE(status.fleet.peers.empty());
+
+  const rpc::QueryArtifactRequest query{"pk", "<robot/>", false, "{}", true, false};
+  rpc::QueryArtifactReply queried;
+  s = connection.call(client::UnaryCall{client::QueryArtifactCall{&query, &queried}}, {});
+  EXPECT_EQ(s.code, StatusCode::FailedPrecondition);
+  EXPECT_NE(s.message.find("not a build host"), std::string::npos) << s.message;
+
+  std::vector<std::uint8_t> fetched;
+  for (int chunks = 0; chunks < 10; ++chunks) {
+    const rpc::FetchArtifactChunkRequest fetch{"key-1", false, fetched.size(), 128};
+    rpc::FetchArtifactChunkReply chunk;
+    s = connection.call(client::UnaryCall{client::FetchArtifactChunkCall{&fetch, &chunk}}, {});
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_EQ(chunk.offset, fetched.size());
+    EXPECT_EQ(chunk.payload_bytes, 300u);
+    if (chunk.data.empty()) break;
+    fetched.insert(fetched.end(), chunk.data.begin(), chunk.data.end());
+  }
+  EXPECT_EQ(fetched, FakeService::artifactPayload());
+  const rpc::FetchArtifactChunkRequest unknown{"key-2", false, 0, 0};
+  rpc::FetchArtifactChunkReply none;
+  EXPECT_EQ(connection.call(client::UnaryCall{client::FetchArtifactChunkCall{&unknown, &none}}, {}).code,
+            StatusCode::NotFound);
+}
+
 TEST_F(DdsTransport, BatchSplitIntoChunksIsReassembled) {
   FakeService service("srv-chunks");
   DdsServerOptions options = serverOptions();

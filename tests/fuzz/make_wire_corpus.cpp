@@ -68,6 +68,16 @@ rpc::GetFunctionReply functionReply() {
   return r;
 }
 
+rpc::FleetStatusReply fleetReply() {
+  rpc::FleetStatusReply r;
+  r.fleet.role = "robot";
+  r.fleet.target = "x86-64-v3";
+  r.fleet.artifacts_fetched = 2;
+  r.fleet.bytes_fetched = 4096;
+  r.fleet.peers = {{"build-a", "robodiffd-b", true, 2, 4096, 1, 0, "signature by an untrusted key"}};
+  return r;
+}
+
 rpc::HealthReply healthReply() {
   rpc::HealthReply r;
   r.state = rpc::ServingState::Serving;
@@ -156,6 +166,10 @@ int main(int argc, char** argv) {
   const rpc::EvaluateReply evaluated{{1.0, -2.0}};
   const rpc::EvaluateBatchReply batched{0, 2, 4, 0, 2, {1.0, 2.0, 3.0, 4.0}};
   const rpc::ListFunctionsReply listed{{{"f-1", "model-1", "rnea", rpc::FunctionState::Failed, false, 3, "why"}}, "next", 5};
+  const rpc::QueryArtifactRequest query{"pk-1", "<robot name=\"r\"/>", false, "{\"function\": \"rnea\"}", true, false};
+  const rpc::QueryArtifactReply queried{rpc::ArtifactState::Have, "key-1", "{\"files\": []}", "ab12", 6, 0, ""};
+  const rpc::FetchArtifactChunkRequest fetch{"key-1", false, 0, 4};
+  const rpc::FetchArtifactChunkReply fetched{0, 6, {0x7f, 0x45, 0x00, 0xff}};
 
   shmRequest(s, "load_model", rpc::Method::LoadModel, load);
   shmRequest(s, "get_function", rpc::Method::GetFunction, get);
@@ -168,6 +182,9 @@ int main(int argc, char** argv) {
   shmRequest(s, "job_status", rpc::Method::JobStatus, rpc::JobStatusRequest{"job-1"});
   shmRequest(s, "cancel_job", rpc::Method::CancelJob, rpc::CancelJobRequest{"job-1"});
   shmRequest(s, "job_result", rpc::Method::JobResult, rpc::JobResultRequest{"job-1"});
+  shmRequest(s, "query_artifact", rpc::Method::QueryArtifact, query);
+  shmRequest(s, "fetch_artifact_chunk", rpc::Method::FetchArtifactChunk, fetch);
+  shmRequest(s, "fleet_status", rpc::Method::FleetStatus, rpc::FleetStatusRequest{true});
   shmReply(s, "load_model", rpc::Method::LoadModel, loaded);
   shmReply(s, "get_function", rpc::Method::GetFunction, functionReply());
   shmReply(s, "evaluate", rpc::Method::Evaluate, evaluated);
@@ -179,6 +196,9 @@ int main(int argc, char** argv) {
   shmReply(s, "job_status", rpc::Method::JobStatus, rpc::JobStatusReply{{jobInfo()}});
   shmReply(s, "cancel_job", rpc::Method::CancelJob, rpc::CancelJobReply{rpc::JobState::Cancelled});
   shmReply(s, "job_result", rpc::Method::JobResult, rpc::JobResultReply{jobInfo(), "{}", "/tmp/job-1"});
+  shmReply(s, "query_artifact", rpc::Method::QueryArtifact, queried);
+  shmReply(s, "fetch_artifact_chunk", rpc::Method::FetchArtifactChunk, fetched);
+  shmReply(s, "fleet_status", rpc::Method::FleetStatus, fleetReply());
 
   ddsRequest(d, "load_model", load);
   ddsRequest(d, "get_function", get);
@@ -191,6 +211,9 @@ int main(int argc, char** argv) {
   ddsRequest(d, "job_status", rpc::JobStatusRequest{"job-1"});
   ddsRequest(d, "cancel_job", rpc::CancelJobRequest{"job-1"});
   ddsRequest(d, "job_result", rpc::JobResultRequest{"job-1"});
+  ddsRequest(d, "query_artifact", query);
+  ddsRequest(d, "fetch_artifact_chunk", fetch);
+  ddsRequest(d, "fleet_status", rpc::FleetStatusRequest{true});
   ddsReply(d, "load_model", loaded);
   ddsReply(d, "get_function", functionReply());
   ddsReply(d, "evaluate", evaluated);
@@ -202,6 +225,9 @@ int main(int argc, char** argv) {
   ddsReply(d, "job_status", rpc::JobStatusReply{{jobInfo()}});
   ddsReply(d, "cancel_job", rpc::CancelJobReply{rpc::JobState::Cancelled});
   ddsReply(d, "job_result", rpc::JobResultReply{jobInfo(), "{}", "/tmp/job-1"});
+  ddsReply(d, "query_artifact", queried);
+  ddsReply(d, "fetch_artifact_chunk", fetched);
+  ddsReply(d, "fleet_status", fleetReply());
   std::printf("wrote %s and %s\n", s.c_str(), d.c_str());
   return 0;
 }

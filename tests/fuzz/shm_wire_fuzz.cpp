@@ -70,6 +70,9 @@ void decodeRequestBody(rpc::Method method, std::span<const std::byte> body) {
     case rpc::Method::JobStatus: return decodeAndRoundTrip<rpc::JobStatusRequest>(body);
     case rpc::Method::CancelJob: return decodeAndRoundTrip<rpc::CancelJobRequest>(body);
     case rpc::Method::JobResult: return decodeAndRoundTrip<rpc::JobResultRequest>(body);
+    case rpc::Method::QueryArtifact: return decodeAndRoundTrip<rpc::QueryArtifactRequest>(body);
+    case rpc::Method::FetchArtifactChunk: return decodeAndRoundTrip<rpc::FetchArtifactChunkRequest>(body);
+    case rpc::Method::FleetStatus: return decodeAndRoundTrip<rpc::FleetStatusRequest>(body);
   }
 }
 
@@ -94,6 +97,9 @@ void decodeReplyBody(rpc::Method method, std::span<const std::byte> body) {
     case rpc::Method::JobStatus: return decodeAndRoundTrip<rpc::JobStatusReply>(body);
     case rpc::Method::CancelJob: return decodeAndRoundTrip<rpc::CancelJobReply>(body);
     case rpc::Method::JobResult: return decodeAndRoundTrip<rpc::JobResultReply>(body);
+    case rpc::Method::QueryArtifact: return decodeAndRoundTrip<rpc::QueryArtifactReply>(body);
+    case rpc::Method::FetchArtifactChunk: return decodeAndRoundTrip<rpc::FetchArtifactChunkReply>(body);
+    case rpc::Method::FleetStatus: return decodeAndRoundTrip<rpc::FleetStatusReply>(body);
   }
 }
 

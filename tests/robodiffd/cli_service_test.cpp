@@ -211,6 +211,7 @@ TEST_F(CliService, CommandsAgainstARealServer) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("SERVING"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("Evaluate"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nfleet       role standalone\n"), std::string::npos) << r.out;  // FleetStatus
   r = runCommand(cli("health --json " + dds));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json health = parsed(r);
@@ -228,6 +229,8 @@ TEST_F(CliService, CommandsAgainstARealServer) {
   EXPECT_EQ(health["transports"].size(), 2u);
   EXPECT_TRUE(health.contains("cache_hits"));
   EXPECT_TRUE(health.contains("uptime_ns"));
+  EXPECT_EQ(health["fleet"]["role"], "standalone") << r.out;
+  EXPECT_TRUE(health["fleet"]["peers"].empty()) << r.out;
 }
 
 TEST_F(CliService, NoServerAndBadUsage) {

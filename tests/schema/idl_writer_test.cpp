@@ -83,6 +83,8 @@ void forEachWireStruct(F&& f) {
   f(rpc::MethodStats{});
   f(rpc::StatusCount{});
   f(rpc::TransportCounts{});
+  f(rpc::FleetPeer{});
+  f(rpc::FleetFigures{});
 }
 
 TEST(IdlWriter, MapsEachCppTypeToItsIdlType) {
@@ -90,6 +92,8 @@ TEST(IdlWriter, MapsEachCppTypeToItsIdlType) {
   EXPECT_EQ(idl::IdlType<bool>::name(), "boolean");
   EXPECT_EQ(idl::IdlType<double>::name(), "double");
   EXPECT_EQ(idl::IdlType<float>::name(), "float");
+  EXPECT_EQ(idl::IdlType<std::uint8_t>::name(), "octet");
+  EXPECT_EQ(idl::IdlType<std::vector<std::uint8_t>>::name(), "sequence<octet>");
   EXPECT_EQ(idl::IdlType<std::uint16_t>::name(), "unsigned short");
   EXPECT_EQ(idl::IdlType<std::uint32_t>::name(), "unsigned long");
   EXPECT_EQ(idl::IdlType<std::uint64_t>::name(), "unsigned long long");
@@ -153,7 +157,7 @@ TEST(IdlWriter, WritesEveryWireStructWithItsFieldsInOrder) {
     for (const auto& [type, field] : idl.fields.at(name)) names.push_back(field);
     EXPECT_EQ(names, testing::fieldNames<T>()) << name;
   });
-  EXPECT_EQ(listed.size(), 33u);
+  EXPECT_EQ(listed.size(), 41u);
   EXPECT_EQ(idl.fields.size(), listed.size()) << "a written struct is not one the wire carries";
   EXPECT_EQ(std::set<std::string>(idl.order.begin(), idl.order.end()).size(), idl.order.size()) << "one struct twice";
 
@@ -168,6 +172,8 @@ TEST(IdlWriter, WritesEveryWireStructWithItsFieldsInOrder) {
       {"EvaluateRequest", {"sequence<double>", "inputs"}}, {"JobInfo", {"double", "progress"}},
       {"JobResultReply", {"JobInfo", "info"}},             {"MethodStats", {"Method", "method"}},
       {"HealthReply", {"ServingState", "state"}},          {"HealthReply", {"sequence<TransportCounts>", "transports"}},
+      {"QueryArtifactReply", {"ArtifactState", "state"}},  {"FetchArtifactChunkReply", {"sequence<octet>", "data"}},
+      {"FleetFigures", {"sequence<FleetPeer>", "peers"}},  {"FleetStatusReply", {"FleetFigures", "fleet"}},
   };
   for (const auto& [name, field] : expected) {
     const auto& fields = idl.fields.at(name);
@@ -194,8 +200,9 @@ TEST(IdlWriter, WritesEachStructAfterTheStructsItContains) {
       EXPECT_LT(it->second, position.at(name)) << name << "." << field << " names " << type << ", written later";
     }
   }
-  // schema_version (twice), status, inputs, outputs, functions, jobs, info, methods, errors, transports
-  EXPECT_EQ(contained, 11);
+  // schema_version (twice), status, inputs, outputs, functions, jobs, info, methods, errors, transports,
+  // peers, fleet
+  EXPECT_EQ(contained, 13);
 }
 
 TEST(IdlWriter, PutsTheVersionAndTheStructsAtTheFramesOneMarker) {
@@ -250,7 +257,7 @@ void expectFrameEnum(const std::map<std::string, int>& enums) {
 
 TEST(IdlWriter, TheFrameHasEveryEnumWithItsValueCount) {
   const auto enums = frameEnums(testing::readFile(testing::sourceDir() / "schema/robodiff.idl.in"));
-  EXPECT_EQ(enums.size(), 7u);
+  EXPECT_EQ(enums.size(), 8u);
   expectFrameEnum<StatusCode>(enums);
   expectFrameEnum<rpc::Method>(enums);
   expectFrameEnum<rpc::FunctionState>(enums);
@@ -258,6 +265,7 @@ TEST(IdlWriter, TheFrameHasEveryEnumWithItsValueCount) {
   expectFrameEnum<rpc::OutputLayout>(enums);
   expectFrameEnum<rpc::JobState>(enums);
   expectFrameEnum<rpc::ServingState>(enums);
+  expectFrameEnum<rpc::ArtifactState>(enums);
 }
 
 }  // namespace

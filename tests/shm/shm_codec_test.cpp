@@ -147,6 +147,118 @@ TEST(ShmCodec, JobMessages) {
   EXPECT_NE(s.message.find("state"), std::string::npos) << s.message;
 }
 
+// Bytes as they come out of a file: zeros, 0xff, every value between.
+std::vector<std::uint8_t> shmCodecTestBytes() {
+  std::vector<std::uint8_t> bytes = {0x00, 0xff, 0x00, 0x00, 0x7f, 0x80, 0xff};
+  for (int i = 0; i < 256; ++i) bytes.push_back(static_cast<std::uint8_t>(i));
+  return bytes;
+}
+
+// Appends a value's bytes as the compact encoding lays them out (native order, no padding).
+template <class T>
+void shmCodecTestAppend(std::vector<std::byte>& out, T value) {
+  const auto* p = reinterpret_cast<const std::byte*>(&value);
+  out.insert(out.end(), p, p + sizeof value);
+}
+
+TEST(ShmCodec, ArtifactMessages) {
+  const auto query = roundTrip(rpc::QueryArtifactRequest{"pk-1", "<robot name='a'/>", true,
+                                                         R"({"build": {"target": "x86-64-v2"}})", false, true});
+  EXPECT_EQ(query.portable_key, "pk-1");
+  EXPECT_EQ(query.urdf, "<robot name='a'/>");
+  EXPECT_TRUE(query.floating_base);
+  EXPECT_EQ(query.spec_json, R"({"build": {"target": "x86-64-v2"}})");
+  EXPECT_FALSE(query.build);
+  EXPECT_TRUE(query.include_sources);
+
+  const auto building = roundTrip(rpc::QueryArtifactReply{rpc::ArtifactState::Building, "", "", "", 0, 3, ""});
+  EXPECT_EQ(building.state, rpc::ArtifactState::Building);
+  EXPECT_EQ(building.builds_queued, 3u);
+  const auto have = roundTrip(rpc::QueryArtifactReply{rpc::ArtifactState::Have, "key-2", R"({"files": ["lib.so"]})",
+                                                      "0a1b", (1ull << 40) + 1, 0, ""});
+  EXPECT_EQ(have.state, rpc::ArtifactState::Have);
+  EXPECT_EQ(have.key, "key-2");
+  EXPECT_EQ(have.manifest_json, R"({"files": ["lib.so"]})");
+  EXPECT_EQ(have.signature_hex, "0a1b");
+  EXPECT_EQ(have.payload_bytes, (1ull << 40) + 1);
+
+  const auto fetch = roundTrip(rpc::FetchArtifactChunkRequest{"key-2", true, 1ull << 36, 1u << 20});
+  EXPECT_EQ(fetch.key, "key-2");
+  EXPECT_TRUE(fetch.include_sources);
+  EXPECT_EQ(fetch.offset, 1ull << 36);
+  EXPECT_EQ(fetch.max_bytes, 1u << 20);
+
+  const std::vector<std::uint8_t> bytes = shmCodecTestBytes();
+  const auto chunk = roundTrip(rpc::FetchArtifactChunkReply{5, 1000, bytes});
+  EXPECT_EQ(chunk.offset, 5u);
+  EXPECT_EQ(chunk.payload_bytes, 1000u);
+  EXPECT_EQ(chunk.data, bytes);
+  const auto end = roundTrip(rpc::FetchArtifactChunkReply{1000, 1000, {}});
+  EXPECT_TRUE(end.data.empty());
+
+  // A state beyond the enum is refused, naming the field.
+  auto bad_state = encode(rpc::QueryArtifactReply{});
+  bad_state[0] = std::byte{4};
+  rpc::QueryArtifactReply refused;
+  const Status s = decode(bad_state, refused);
+  EXPECT_EQ(s.code, StatusCode::InvalidArgument);
+  EXPECT_NE(s.message.find("state has unknown value 4"), std::string::npos) << s.message;
+}
+
+// Sequences of numbers go as one block: exactly a count and the values, as element by element.
+TEST(ShmCodec, NumberSequencesAreACountThenTheValues) {
+  std::vector<std::byte> expected;
+  shmCodecTestAppend<std::uint64_t>(expected, 9);
+  shmCodecTestAppend<std::uint64_t>(expected, 12);
+  shmCodecTestAppend<std::uint32_t>(expected, 3);
+  for (std::uint8_t b : {0x00, 0xff, 0x10}) shmCodecTestAppend(expected, b);
+  EXPECT_EQ(encode(rpc::FetchArtifactChunkReply{9, 12, {0x00, 0xff, 0x10}}), expected);
+
+  rpc::OutputBlock block{"", rpc::OutputKind::Jacobian, 2, 3, rpc::OutputLayout::SparseCsr, 2, {0, 1, 2}, {0, 2}};
+  rpc::GetFunctionReply function{"", rpc::FunctionState::Ready, {}, {block}};
+  expected.clear();
+  for (std::uint32_t v : {0u, 0u, 0u, 1u,      // function_id "", state, no inputs, one output
+                          0u, 1u, 2u, 3u, 1u, 2u,  // name "", kind, rows, cols, layout, nnz
+                          3u, 0u, 1u, 2u, 2u, 0u, 2u})  // row_offsets, col_indices
+    shmCodecTestAppend(expected, v);
+  EXPECT_EQ(encode(function), expected);
+
+  // A byte count beyond the body is refused before anything is allocated, naming the field.
+  auto cut = encode(rpc::FetchArtifactChunkReply{0, 3, {1, 2, 3}});
+  const std::uint32_t huge = 1u << 30;
+  std::memcpy(cut.data() + 16, &huge, sizeof huge);
+  rpc::FetchArtifactChunkReply out;
+  const Status s = decode(cut, out);
+  EXPECT_EQ(s.code, StatusCode::InvalidArgument);
+  EXPECT_NE(s.message.find("data claims 1073741824 elements"), std::string::npos) << s.message;
+}
+
+TEST(ShmCodec, FleetStatus) {
+  EXPECT_TRUE(roundTrip(rpc::FleetStatusRequest{true}).verbose);
+  rpc::FleetStatusReply in;
+  in.fleet = {"robot", "x86-64-v4", 1, 2, 3, 4, 5, 6, 7, {}};
+  in.fleet.peers = {{"build-a", "robodiffd-9", true, 8, 9, 10, 11, "hash mismatch in lib.so"},
+                    {"build-b", "", false, 0, 0, 0, 0, ""}};
+  const rpc::FleetFigures f = roundTrip(in).fleet;
+  EXPECT_EQ(f.role, "robot");
+  EXPECT_EQ(f.target, "x86-64-v4");
+  const std::vector<std::uint64_t> counts{f.artifacts_fetched, f.bytes_fetched, f.artifacts_refused,
+                                          f.fetch_failures,    f.artifacts_served, f.bytes_served,
+                                          f.builds_for_robots};
+  for (std::size_t i = 0; i < counts.size(); ++i) EXPECT_EQ(counts[i], i + 1);
+  ASSERT_EQ(f.peers.size(), 2u);
+  EXPECT_EQ(f.peers[0].service, "build-a");
+  EXPECT_EQ(f.peers[0].instance_id, "robodiffd-9");
+  EXPECT_TRUE(f.peers[0].reachable);
+  EXPECT_EQ(f.peers[0].artifacts_fetched, 8u);
+  EXPECT_EQ(f.peers[0].bytes_fetched, 9u);
+  EXPECT_EQ(f.peers[0].refusals, 10u);
+  EXPECT_EQ(f.peers[0].failures, 11u);
+  EXPECT_EQ(f.peers[0].last_problem, "hash mismatch in lib.so");
+  EXPECT_EQ(f.peers[1].service, "build-b");
+  EXPECT_FALSE(f.peers[1].reachable);
+}
+
 TEST(ShmCodec, HealthReplyEveryField) {
   rpc::HealthReply h;
   h.state = rpc::ServingState::Draining;

@@ -95,6 +95,40 @@ TEST_F(ShmTransport, EveryMethodRoundTrips) {
   EXPECT_EQ(fake_->count(StatusCode::NotFound), 1u);
 }
 
+// The fleet methods: FleetStatus and QueryArtifact answered by ServiceApi's defaults, an
+// artifact's bytes (zeros and 0xff among them) fetched chunk by chunk and put back together.
+TEST_F(ShmTransport, FleetMethodsRoundTrip) {
+  startServer();
+  auto c = connect(service_);
+  ASSERT_TRUE(c);
+
+  const rpc::FleetStatusRequest status_request;
+  rpc::FleetStatusReply status;
+  Status s = c->call(client::UnaryCall{client::FleetStatusCall{&status_request, &status}}, {});
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_EQ(status.fleet.role, "standalone");
+
+  const rpc::QueryArtifactRequest query{"pk", "<robot/>", false, "{}", true, false};
+  rpc::QueryArtifactReply queried;
+  s = c->call(client::UnaryCall{client::QueryArtifactCall{&query, &queried}}, {});
+  EXPECT_EQ(s.code, StatusCode::FailedPrecondition);
+  EXPECT_NE(s.message.find("not a build host"), std::string::npos) << s.message;
+
+  std::vector<std::uint8_t> fetched;
+  for (int chunks = 0; chunks < 10; ++chunks) {
+    const rpc::FetchArtifactChunkRequest fetch{"key-1", false, fetched.size(), 0};  // the fake's 100 bytes
+    rpc::FetchArtifactChunkReply chunk;
+    s = c->call(client::UnaryCall{client::FetchArtifactChunkCall{&fetch, &chunk}}, {});
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_EQ(chunk.offset, fetched.size());
+    EXPECT_EQ(chunk.payload_bytes, 300u);
+    if (chunk.data.empty()) break;
+    EXPECT_LE(chunk.data.size(), 100u);
+    fetched.insert(fetched.end(), chunk.data.begin(), chunk.data.end());
+  }
+  EXPECT_EQ(fetched, FakeService::artifactPayload());
+}
+
 TEST_F(ShmTransport, EvaluateAndBatchValues) {
   startServer();
   auto c = connect(service_);

@@ -203,6 +203,15 @@ rpc::HealthReply Client::health() {
   return reply;
 }
 
+rpc::FleetStatusReply Client::fleetStatus() {
+  Impl& c = *impl_;
+  if (!c.connection) throw ClientError(c.noServer());
+  const rpc::FleetStatusRequest request;
+  rpc::FleetStatusReply reply;
+  throwIfFailed(c.connection->call(UnaryCall{FleetStatusCall{&request, &reply}}, c.callOptions()));
+  return reply;
+}
+
 Function Client::functionFile(const ModelInfo& model, const std::filesystem::path& spec_path) {
   std::ifstream in(spec_path);
   std::ostringstream text;

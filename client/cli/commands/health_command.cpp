@@ -1,6 +1,8 @@
-// `robodiff health`: what the running server says of itself (Health), readable or JSON.
+// `robodiff health`: what the running server says of itself (Health, then FleetStatus:
+// its part in a fleet, docs/fleet.md), readable or JSON.
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -69,6 +71,29 @@ nlohmann::ordered_json healthJson(const rpc::HealthReply& h, const ServiceConnec
           {"server", c.address}};
 }
 
+nlohmann::ordered_json fleetJson(const rpc::FleetFigures& f) {
+  nlohmann::ordered_json peers = nlohmann::ordered_json::array();
+  for (const rpc::FleetPeer& p : f.peers)
+    peers.push_back({{"service", p.service},
+                     {"instance_id", p.instance_id},
+                     {"reachable", p.reachable},
+                     {"artifacts_fetched", p.artifacts_fetched},
+                     {"bytes_fetched", p.bytes_fetched},
+                     {"refusals", p.refusals},
+                     {"failures", p.failures},
+                     {"last_problem", p.last_problem}});
+  return {{"role", f.role},
+          {"target", f.target},
+          {"artifacts_fetched", f.artifacts_fetched},
+          {"bytes_fetched", f.bytes_fetched},
+          {"artifacts_refused", f.artifacts_refused},
+          {"fetch_failures", f.fetch_failures},
+          {"artifacts_served", f.artifacts_served},
+          {"bytes_served", f.bytes_served},
+          {"builds_for_robots", f.builds_for_robots},
+          {"peers", peers}};
+}
+
 void printHealth(const rpc::HealthReply& h, const ServiceConnection& c) {
   const double uptime = static_cast<double>(h.uptime_ns) / 1e9;
   std::cout << "robodiffd " << h.version << "  " << rpc::toString(h.state) << "  instance " << h.server_instance_id
@@ -108,14 +133,60 @@ void printHealth(const rpc::HealthReply& h, const ServiceConnection& c) {
   table.print(std::cout);
 }
 
+// One build host as the robot sees it: "build-a (robodiffd-1): reachable; 3 fetched (1.2 MiB), ...".
+void printPeer(const rpc::FleetPeer& p) {
+  std::cout << p.service << " (" << (p.instance_id.empty() ? "never reached" : p.instance_id) << "): "
+            << (p.reachable ? "reachable" : "unreachable") << "; " << p.artifacts_fetched << " fetched ("
+            << formatBytes(p.bytes_fetched) << "), " << p.refusals << " refused, " << p.failures << " failed";
+  if (!p.last_problem.empty()) std::cout << "; last problem: " << p.last_problem;
+  std::cout << "\n";
+}
+
+void printFleet(const rpc::FleetFigures& f) {
+  std::cout << "\nfleet       role " << f.role;
+  if (!f.target.empty()) std::cout << ", target " << f.target;
+  std::cout << "\n";
+  if (f.role == "robot") {
+    std::cout << "            " << f.artifacts_fetched << " artifacts fetched (" << formatBytes(f.bytes_fetched)
+              << "), " << f.artifacts_refused << " refused, " << f.fetch_failures << " fetches failed\n";
+    std::cout << "peers      ";
+    if (f.peers.empty()) std::cout << " none\n";
+    for (std::size_t i = 0; i < f.peers.size(); ++i) {
+      std::cout << (i ? "            " : " ");
+      printPeer(f.peers[i]);
+    }
+  } else if (f.role == "build") {
+    std::cout << "            " << f.artifacts_served << " artifacts served (" << formatBytes(f.bytes_served)
+              << " sent), " << f.builds_for_robots << " builds for robots\n";
+  }
+}
+
+// FleetStatus, asked beside Health; nothing from a server without it (UNIMPLEMENTED, or
+// FAILED_PRECONDITION from an older schema), so that health still works there.
+std::optional<rpc::FleetFigures> fleetStatus(const ServiceConnection& c) {
+  const rpc::FleetStatusRequest request;
+  rpc::FleetStatusReply reply;
+  const Status s = c->call(client::UnaryCall{client::FleetStatusCall{&request, &reply}}, c.call());
+  if (s.code == StatusCode::Unimplemented || s.code == StatusCode::FailedPrecondition) return std::nullopt;
+  check(s, "FleetStatus");
+  return reply.fleet;
+}
+
 void health(const HealthArgs& args) {
   ServiceConnection c = connectService(args.service);
   rpc::HealthRequest request;
   request.verbose = true;
   rpc::HealthReply reply;
   check(c->health(request, reply, c.call()), "Health");
-  if (args.json) std::cout << healthJson(reply, c).dump() << "\n";
-  else printHealth(reply, c);
+  const std::optional<rpc::FleetFigures> fleet = fleetStatus(c);
+  if (args.json) {
+    nlohmann::ordered_json out = healthJson(reply, c);
+    if (fleet) out["fleet"] = fleetJson(*fleet);
+    std::cout << out.dump() << "\n";
+    return;
+  }
+  printHealth(reply, c);
+  if (fleet) printFleet(*fleet);
 }
 
 }  // namespace
@@ -127,7 +198,9 @@ void addHealthCommand(CLI::App& app) {
                 "Print every field of the reply: {\"state\", \"version\", \"server_instance_id\", \"uptime_ns\", "
                 "\"models_loaded\", ..., \"methods\": [{\"method\", \"requests\", \"errors\", \"p50_ns\", "
                 "\"p90_ns\", \"p99_ns\", \"max_ns\"}], \"errors\": [{\"code\", \"count\"}], \"transports\": "
-                "[{\"transport\", \"requests\", \"errors\"}]}, plus the \"transport\" and \"server\" used");
+                "[{\"transport\", \"requests\", \"errors\"}]}, plus the \"transport\" and \"server\" used, and "
+                "\"fleet\": {\"role\", \"target\", ..., \"peers\": [{\"service\", \"instance_id\", \"reachable\", "
+                "...}]} (FleetStatus; absent when the server does not answer it)");
   addServiceOptions(*cmd, args->service);
   cmd->footer(std::string("Latencies are the server's own (from taking a request to its reply).\n") + kServiceExitHelp);
   cmd->callback([args] { health(*args); });

@@ -51,7 +51,7 @@ std::optional<rpc::Method> methodFromWire(robodiff_wire_Method method) {
 
 namespace {
 
-// Sequences of plain values (doubles, unsigned longs): one dds_alloc'd copy.
+// Sequences of plain values (doubles, unsigned longs, octets): one dds_alloc'd copy.
 template <class Seq, class T>
 void copyToWire(const std::vector<T>& in, Seq& out) {
   using Element = std::remove_pointer_t<decltype(out._buffer)>;
@@ -194,8 +194,18 @@ void bodyToWire(const Body& body, Union& out) {
           toWire(message, out._u.job_status);
         else if constexpr (std::is_same_v<M, rpc::CancelJobRequest> || std::is_same_v<M, rpc::CancelJobReply>)
           toWire(message, out._u.cancel_job);
-        else
+        else if constexpr (std::is_same_v<M, rpc::JobResultRequest> || std::is_same_v<M, rpc::JobResultReply>)
           toWire(message, out._u.job_result);
+        else if constexpr (std::is_same_v<M, rpc::QueryArtifactRequest> ||
+                           std::is_same_v<M, rpc::QueryArtifactReply>)
+          toWire(message, out._u.query_artifact);
+        else if constexpr (std::is_same_v<M, rpc::FetchArtifactChunkRequest> ||
+                           std::is_same_v<M, rpc::FetchArtifactChunkReply>)
+          toWire(message, out._u.fetch_artifact_chunk);
+        else if constexpr (std::is_same_v<M, rpc::FleetStatusRequest> || std::is_same_v<M, rpc::FleetStatusReply>)
+          toWire(message, out._u.fleet_status);
+        else
+          static_assert(sizeof(M) == 0, "a body alternative with no union member here");
       },
       body);
 }
@@ -220,6 +230,9 @@ Status bodyFromWire(const Union& in, Body& out) {
     case rpc::Method::JobStatus: fromWire(in._u.job_status, out.template emplace<8>()); break;
     case rpc::Method::CancelJob: fromWire(in._u.cancel_job, out.template emplace<9>()); break;
     case rpc::Method::JobResult: fromWire(in._u.job_result, out.template emplace<10>()); break;
+    case rpc::Method::QueryArtifact: fromWire(in._u.query_artifact, out.template emplace<11>()); break;
+    case rpc::Method::FetchArtifactChunk: fromWire(in._u.fetch_artifact_chunk, out.template emplace<12>()); break;
+    case rpc::Method::FleetStatus: fromWire(in._u.fleet_status, out.template emplace<13>()); break;
   }
   return {};
 }
@@ -244,6 +257,9 @@ ReplyBody emptyReplyBody(rpc::Method method) {
     case rpc::Method::JobStatus: return rpc::JobStatusReply{};
     case rpc::Method::CancelJob: return rpc::CancelJobReply{};
     case rpc::Method::JobResult: return rpc::JobResultReply{};
+    case rpc::Method::QueryArtifact: return rpc::QueryArtifactReply{};
+    case rpc::Method::FetchArtifactChunk: return rpc::FetchArtifactChunkReply{};
+    case rpc::Method::FleetStatus: return rpc::FleetStatusReply{};
   }
   return rpc::HealthReply{};
 }

@@ -1,8 +1,9 @@
 #pragma once
 // The compact encoding of the iceoryx bodies other than Evaluate's, derived from the
 // messages' field lists (rpc::Fields): every field in order; u8 booleans, u32 enums and
-// counts, u32 / u64 / f64 numbers in native byte order (shared memory never leaves the
-// host), strings and sequences as a u32 count then the elements, nested structs inline.
+// counts, u8 / u16 / u32 / u64 / f64 numbers in native byte order (shared memory never
+// leaves the host), strings and sequences as a u32 count then the elements (a sequence of
+// numbers as one block), nested structs inline.
 // Reading checks every length against what remains and every enum against its range; the
 // first failure sticks and names the field by its path ("outputs.row_offsets").
 
@@ -76,6 +77,15 @@ class Reader {
     }
     return ok() ? n : 0;
   }
+  // A sequence of numbers (no bools, no enums: their values need checking) copied at once;
+  // byte for byte what a count and element-by-element number() reads would give.
+  template <class T>
+  void numbers(const std::string& field, std::vector<T>& out) {
+    out.resize(count(field, sizeof(T)));
+    if (out.empty()) return;
+    std::memcpy(out.data(), body_.data() + pos_, out.size() * sizeof(T));
+    pos_ += out.size() * sizeof(T);
+  }
   // OK only when every byte was read.
   Status finish(const char* message) {
     if (ok() && pos_ != body_.size()) fail(std::to_string(body_.size() - pos_) + " unexpected trailing bytes");
@@ -114,6 +124,11 @@ std::size_t minimumBytes() {
   }
 }
 
+// Sequences whose elements are plain numbers travel as one block (bytes, doubles, counts):
+// the same layout as element by element, without a call per element.
+template <class T>
+constexpr bool kNumberBlock = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;
+
 template <class T>
 void write(Writer& w, const T& v) {
   if constexpr (std::is_same_v<T, bool>) w.number<std::uint8_t>(v ? 1 : 0);
@@ -124,7 +139,8 @@ void write(Writer& w, const T& v) {
     w.raw(v.data(), v.size());
   } else if constexpr (IsVector<T>::value) {
     w.number(static_cast<std::uint32_t>(v.size()));
-    for (const auto& element : v) write(w, element);
+    if constexpr (kNumberBlock<typename T::value_type>) w.raw(v.data(), v.size() * sizeof(typename T::value_type));
+    else for (const auto& element : v) write(w, element);
   } else {
     rpc::Fields<T>::visit(v, v, [&](const char*, const auto& f, const auto&) { write(w, f); });
   }
@@ -149,8 +165,12 @@ void read(Reader& r, const std::string& field, T& v) {
   } else if constexpr (std::is_same_v<T, std::string>) {
     v = r.text(field, r.number<std::uint32_t>(field));
   } else if constexpr (IsVector<T>::value) {
-    v.assign(r.count(field, minimumBytes<typename T::value_type>()), {});
-    for (auto& element : v) read(r, field, element);
+    if constexpr (kNumberBlock<typename T::value_type>) {
+      r.numbers(field, v);
+    } else {
+      v.assign(r.count(field, minimumBytes<typename T::value_type>()), {});
+      for (auto& element : v) read(r, field, element);
+    }
   } else {
     rpc::Fields<T>::visit(v, v, [&](const char* name, auto& f, auto&) { read(r, pathOf(field, name), f); });
   }

@@ -391,6 +391,14 @@ void DdsServer::Core::runPosted(const robodiff_wire_Request& sample, const Reque
         return serve(body.cancel_job, rpc::CancelJobRequest{}, rpc::CancelJobReply{}, &ServiceApi::cancelJob);
       case rpc::Method::JobResult:
         return serve(body.job_result, rpc::JobResultRequest{}, rpc::JobResultReply{}, &ServiceApi::jobResult);
+      case rpc::Method::QueryArtifact:
+        return serve(body.query_artifact, rpc::QueryArtifactRequest{}, rpc::QueryArtifactReply{},
+                     &ServiceApi::queryArtifact);
+      case rpc::Method::FetchArtifactChunk:
+        return serve(body.fetch_artifact_chunk, rpc::FetchArtifactChunkRequest{}, rpc::FetchArtifactChunkReply{},
+                     &ServiceApi::fetchArtifactChunk);
+      case rpc::Method::FleetStatus:
+        return serve(body.fleet_status, rpc::FleetStatusRequest{}, rpc::FleetStatusReply{}, &ServiceApi::fleetStatus);
       case rpc::Method::EvaluateBatch: return evaluateBatch(info, body.evaluate_batch);
       case rpc::Method::Evaluate: break;  // inline, never posted
     }

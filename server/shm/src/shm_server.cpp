@@ -491,6 +491,9 @@ struct ShmServer::Impl {
       case rpc::Method::JobStatus: return call(r, ctx, &ServiceApi::jobStatus);
       case rpc::Method::CancelJob: return call(r, ctx, &ServiceApi::cancelJob);
       case rpc::Method::JobResult: return call(r, ctx, &ServiceApi::jobResult);
+      case rpc::Method::QueryArtifact: return call(r, ctx, &ServiceApi::queryArtifact);
+      case rpc::Method::FetchArtifactChunk: return call(r, ctx, &ServiceApi::fetchArtifactChunk);
+      case rpc::Method::FleetStatus: return call(r, ctx, &ServiceApi::fleetStatus);
       default:
         return sendReply(r, {StatusCode::Unimplemented, "method not served by posting"});
     }

@@ -40,6 +40,7 @@ ROBODIFF_IDL_TYPE(std::string, "string");
 ROBODIFF_IDL_TYPE(bool, "boolean");
 ROBODIFF_IDL_TYPE(double, "double");
 ROBODIFF_IDL_TYPE(float, "float");
+ROBODIFF_IDL_TYPE(std::uint8_t, "octet");  // bytes: sequence<octet> (idlc: dds_sequence_octet)
 ROBODIFF_IDL_TYPE(std::uint16_t, "unsigned short");
 ROBODIFF_IDL_TYPE(std::uint32_t, "unsigned long");
 ROBODIFF_IDL_TYPE(std::uint64_t, "unsigned long long");

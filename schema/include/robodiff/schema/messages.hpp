@@ -33,8 +33,11 @@ enum class Method : std::uint32_t {  // robodiff_wire_Method
   JobStatus = 8,
   CancelJob = 9,
   JobResult = 10,
+  QueryArtifact = 11,
+  FetchArtifactChunk = 12,
+  FleetStatus = 13,
 };
-inline constexpr std::uint32_t kMethodCount = 11;
+inline constexpr std::uint32_t kMethodCount = 14;
 const char* toString(Method method);  // "LoadModel", ...
 
 // valueCount(e): how many values an enum has (the codecs refuse others off the wire);
@@ -283,6 +286,52 @@ struct JobResultReply {
 };
 ROBODIFF_FIELDS(JobResultReply, info, result_json, result_dir);
 
+// ---- Artifacts (a fleet: robot hosts fetch signed libraries from build hosts) --------
+
+// A robot host asks a build host for a function's library by its portable key (docs/fleet.md),
+// then pulls the signed entry's files in chunks. Only a server configured as a build host
+// answers (FAILED_PRECONDITION otherwise).
+enum class ArtifactState : std::uint32_t { Have = 0, Building = 1, Lack = 2, Failed = 3 };
+const char* toString(ArtifactState state);  // "HAVE", "BUILDING", "LACK", "FAILED"
+constexpr std::uint32_t valueCount(ArtifactState) { return 4; }
+constexpr const char* idlName(ArtifactState) { return "ArtifactState"; }
+
+struct QueryArtifactRequest {
+  std::string portable_key;            // cache::preparePortableKey on the robot (no compiler needed)
+  std::string urdf;                    // the robot's URDF text: the build host checks and builds from it
+  bool floating_base = false;
+  std::string spec_json;               // the normalised spec, build.target naming the robot's x86-64 level
+  bool build = false;                  // true: a library the build host lacks is built (BUILDING), not LACK
+  bool include_sources = false;        // the generated C travels too (larger)
+};
+ROBODIFF_FIELDS(QueryArtifactRequest, portable_key, urdf, floating_base, spec_json, build, include_sources);
+
+struct QueryArtifactReply {
+  ArtifactState state = ArtifactState::Lack;
+  std::string key;                     // HAVE: the entry's key (the build host's compiler in it)
+  std::string manifest_json;           // HAVE: the signed manifest (cache/entry_manifest.hpp)
+  std::string signature_hex;           // HAVE: its Ed25519 signature
+  std::uint64_t payload_bytes = 0;     // HAVE: the manifest's files, concatenated in its order
+  std::uint32_t builds_queued = 0;     // BUILDING: builds ahead of and including this one
+  std::string message;                 // LACK / FAILED: why
+};
+ROBODIFF_FIELDS(QueryArtifactReply, state, key, manifest_json, signature_hex, payload_bytes, builds_queued, message);
+
+struct FetchArtifactChunkRequest {
+  std::string key;                     // a key a QueryArtifact answered HAVE with
+  bool include_sources = false;        // as in that query
+  std::uint64_t offset = 0;            // into the payload
+  std::uint32_t max_bytes = 0;         // 0: the server's chunk size; capped by it
+};
+ROBODIFF_FIELDS(FetchArtifactChunkRequest, key, include_sources, offset, max_bytes);
+
+struct FetchArtifactChunkReply {
+  std::uint64_t offset = 0;            // the request's
+  std::uint64_t payload_bytes = 0;     // the whole payload
+  std::vector<std::uint8_t> data;      // payload bytes from offset; empty at the end
+};
+ROBODIFF_FIELDS(FetchArtifactChunkReply, offset, payload_bytes, data);
+
 // ---- Health -------------------------------------------------------------------------
 
 enum class ServingState : std::uint32_t { Starting = 0, Serving = 1, Draining = 2 };
@@ -316,6 +365,42 @@ struct TransportCounts {
 };
 ROBODIFF_FIELDS(TransportCounts, transport, requests, errors);
 
+// A build host a robot host asks for artifacts, as the robot sees it.
+struct FleetPeer {
+  std::string service;                 // its DDS service name (fleet.build_hosts)
+  std::string instance_id;             // the server that last answered; empty: never reached
+  bool reachable = false;              // its last call got an answer
+  std::uint64_t artifacts_fetched = 0, bytes_fetched = 0, refusals = 0, failures = 0;
+  std::string last_problem;            // the latest refusal or failure
+};
+ROBODIFF_FIELDS(FleetPeer, service, instance_id, reachable, artifacts_fetched, bytes_fetched, refusals, failures,
+                last_problem);
+
+// This server's part in a fleet (docs/fleet.md).
+struct FleetFigures {
+  std::string role;                    // "standalone", "build", "robot"
+  std::string target;                  // robot: the x86-64 level it asks builds for
+  std::uint64_t artifacts_fetched = 0, bytes_fetched = 0;   // robot: verified and filed
+  std::uint64_t artifacts_refused = 0;                      // robot: failed verification
+  std::uint64_t fetch_failures = 0;                         // robot: no build host could deliver
+  std::uint64_t artifacts_served = 0, bytes_served = 0;     // build host: whole payloads, chunk bytes
+  std::uint64_t builds_for_robots = 0;                      // build host: builds robots asked for
+  std::vector<FleetPeer> peers;        // robot: its build hosts
+};
+ROBODIFF_FIELDS(FleetFigures, role, target, artifacts_fetched, bytes_fetched, artifacts_refused, fetch_failures,
+                artifacts_served, bytes_served, builds_for_robots, peers);
+
+// `robodiff health` asks it beside Health (a 2.0 server answers UNIMPLEMENTED).
+struct FleetStatusRequest {
+  bool verbose = false;                // reserved (a body may not be empty)
+};
+ROBODIFF_FIELDS(FleetStatusRequest, verbose);
+
+struct FleetStatusReply {
+  FleetFigures fleet;
+};
+ROBODIFF_FIELDS(FleetStatusReply, fleet);
+
 struct HealthReply {
   ServingState state = ServingState::Starting;
   std::string version;                 // robodiff's
@@ -347,6 +432,7 @@ ROBODIFF_FIELDS(HealthReply, state, version, server_instance_id, uptime_ns, mode
   X(ListFunctionsRequest) X(ListFunctionsReply) X(HealthRequest) X(HealthReply)         \
   X(ReleaseRequest) X(ReleaseReply) X(SubmitJobRequest) X(SubmitJobReply)               \
   X(JobStatusRequest) X(JobStatusReply) X(CancelJobRequest) X(CancelJobReply)           \
-  X(JobResultRequest) X(JobResultReply)
+  X(JobResultRequest) X(JobResultReply) X(QueryArtifactRequest) X(QueryArtifactReply)                   \
+  X(FetchArtifactChunkRequest) X(FetchArtifactChunkReply) X(FleetStatusRequest) X(FleetStatusReply)
 
 }  // namespace robodiff::rpc

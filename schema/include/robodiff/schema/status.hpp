@@ -49,10 +49,11 @@ struct Status {
 // The schema version this build speaks; robodiff.idl's SCHEMA_VERSION_MAJOR / MINOR are
 // written from these. Bump MINOR for additions a server can ignore or answer (a new method,
 // a new enum value at the end); bump MAJOR for anything else.
+// 2.1: the artifact methods (QueryArtifact, FetchArtifactChunk) and FleetStatus.
 // 2.0: ListFunctions paged (members added to @final ListFunctionsRequest / Reply) and
 // iceoryx requests on a session per connection; 1.1 had added the job methods.
 inline constexpr std::uint16_t kSchemaVersionMajor = 2;
-inline constexpr std::uint16_t kSchemaVersionMinor = 0;
+inline constexpr std::uint16_t kSchemaVersionMinor = 1;
 
 // The rule a server applies to a request's schema version: same major, and a client
 // minor not newer than the server's (an older client only misses additions; a newer one

@@ -168,6 +168,9 @@ class Client {
   Function functionFile(const ModelInfo& model, const std::filesystem::path& spec_path);
 
   rpc::HealthReply health();                      // from the server; throws without one
+  // The server's part in a fleet (role, peers, artifact counts; docs/fleet.md). Throws
+  // without a server, and with the server's status (UNIMPLEMENTED from a 2.0 server).
+  rpc::FleetStatusReply fleetStatus();
   std::vector<rpc::FunctionSummary> functions();  // ListFunctions
 
   // Batch jobs, run by the server in its worker processes (client/api/src/jobs.cpp; the

@@ -53,8 +53,13 @@ using SubmitJobCall = MethodCall<rpc::Method::SubmitJob, rpc::SubmitJobRequest, 
 using JobStatusCall = MethodCall<rpc::Method::JobStatus, rpc::JobStatusRequest, rpc::JobStatusReply>;
 using CancelJobCall = MethodCall<rpc::Method::CancelJob, rpc::CancelJobRequest, rpc::CancelJobReply>;
 using JobResultCall = MethodCall<rpc::Method::JobResult, rpc::JobResultRequest, rpc::JobResultReply>;
+using QueryArtifactCall = MethodCall<rpc::Method::QueryArtifact, rpc::QueryArtifactRequest, rpc::QueryArtifactReply>;
+using FetchArtifactChunkCall =
+    MethodCall<rpc::Method::FetchArtifactChunk, rpc::FetchArtifactChunkRequest, rpc::FetchArtifactChunkReply>;
+using FleetStatusCall = MethodCall<rpc::Method::FleetStatus, rpc::FleetStatusRequest, rpc::FleetStatusReply>;
 using UnaryCall = std::variant<LoadModelCall, GetFunctionCall, ListFunctionsCall, HealthCall, ReleaseCall,
-                               SubmitJobCall, JobStatusCall, CancelJobCall, JobResultCall>;
+                               SubmitJobCall, JobStatusCall, CancelJobCall, JobResultCall, QueryArtifactCall,
+                               FetchArtifactChunkCall, FleetStatusCall>;
 
 class Connection {
  public:

@@ -103,11 +103,15 @@ void fromWire(const Wire& in, Message& out);
 using RequestBody = std::variant<rpc::LoadModelRequest, rpc::GetFunctionRequest, rpc::EvaluateRequest,
                                  rpc::EvaluateBatchRequest, rpc::ListFunctionsRequest, rpc::HealthRequest,
                                  rpc::ReleaseRequest, rpc::SubmitJobRequest, rpc::JobStatusRequest,
-                                 rpc::CancelJobRequest, rpc::JobResultRequest>;
+                                 rpc::CancelJobRequest, rpc::JobResultRequest, rpc::QueryArtifactRequest,
+                                 rpc::FetchArtifactChunkRequest, rpc::FleetStatusRequest>;
 using ReplyBody = std::variant<rpc::LoadModelReply, rpc::GetFunctionReply, rpc::EvaluateReply,
                                rpc::EvaluateBatchReply, rpc::ListFunctionsReply, rpc::HealthReply,
                                rpc::ReleaseReply, rpc::SubmitJobReply, rpc::JobStatusReply, rpc::CancelJobReply,
-                               rpc::JobResultReply>;
+                               rpc::JobResultReply, rpc::QueryArtifactReply, rpc::FetchArtifactChunkReply,
+                               rpc::FleetStatusReply>;
+static_assert(std::variant_size_v<RequestBody> == rpc::kMethodCount &&
+              std::variant_size_v<ReplyBody> == rpc::kMethodCount, "one alternative per method, in Method order");
 
 // Sets the discriminator and fills the union member (out must be zeroed).
 void toWire(const RequestBody& body, robodiff_wire_RequestBody& out);

@@ -13,7 +13,7 @@
 // Evaluate / EvaluateBatch bodies are a small fixed part, the function id (requests),
 // then the doubles, 8-byte aligned: the server evaluates straight from the request chunk
 // into the response chunk. The other methods' bodies are the message encoded compactly:
-// u8 booleans, u32 / u64 / f64 numbers (native byte order: shared memory never leaves the
+// u8 booleans, u8 / u32 / u64 / f64 numbers (native byte order: shared memory never leaves the
 // host), strings and sequences as a u32 count then the elements, every field in the
 // order of messages.hpp.
 //

@@ -113,6 +113,27 @@ class ServiceApi {
   }
   static Status noJobs() { return {StatusCode::Unimplemented, "this server runs no jobs"}; }
 
+  // A fleet (docs/fleet.md): robot hosts fetch signed libraries from build hosts. The
+  // defaults are a server that is no build host (the artifact methods answer
+  // FAILED_PRECONDITION) and stands alone (FleetStatus: role "standalone").
+  virtual Status queryArtifact(const CallContext& ctx, const rpc::QueryArtifactRequest& request,
+                               rpc::QueryArtifactReply& reply) {
+    return notABuildHost();
+  }
+  virtual Status fetchArtifactChunk(const CallContext& ctx, const rpc::FetchArtifactChunkRequest& request,
+                                    rpc::FetchArtifactChunkReply& reply) {
+    return notABuildHost();
+  }
+  virtual Status fleetStatus(const CallContext& ctx, const rpc::FleetStatusRequest& request,
+                             rpc::FleetStatusReply& reply) {
+    reply.fleet.role = "standalone";
+    return {};
+  }
+  static Status notABuildHost() {
+    return {StatusCode::FailedPrecondition,
+            "this server is not a build host (fleet.role = build serves artifacts; docs/fleet.md)"};
+  }
+
   // NOT_FOUND for an unknown (or released) function id; otherwise its sizes.
   virtual Status shape(std::string_view function_id, FunctionShape& shape) = 0;
   // One knot: inputs.size() must be input_count and outputs.size() output_count
