@@ -8,57 +8,19 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <fstream>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
-#include "artifact_files.hpp"
 #include "robodiff/cache/artifact_bundle.hpp"
-#include "robodiff/cache/entry_manifest.hpp"
-#include "robodiff/model/canonical.hpp"
+#include "robodiff/cache/entry_transfer.hpp"
 
 namespace robodiff::cache {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-// One file of an entry, read into memory: what is hashed is what is written.
-struct MemberData {
-  std::string name;
-  std::string bytes;
-};
-
-std::string readWhole(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw CacheError(CacheError::Kind::Io, "cannot read " + file.string() + ": " + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The files of a verified artifact, sorted by name: library, description, sources
-// (decompressed: the C as compiled, independent of the zstd version).
-std::vector<MemberData> entryFiles(const Artifact& artifact) {
-  std::vector<MemberData> files{{"description.json", readWhole(artifact.description())},
-                                {"library.so", readWhole(artifact.library())}};
-  std::vector<fs::path> sources;
-  std::error_code ec;
-  for (fs::directory_iterator it(artifact.dir() / "src", ec), end; !ec && it != end; it.increment(ec))
-    if (it->path().extension() == ".zst") sources.push_back(it->path());
-  std::sort(sources.begin(), sources.end());
-  for (const fs::path& s : sources) {
-    const std::string name = "src/" + s.stem().string();
-    if (!isEntryFileName(name))
-      throw std::runtime_error("cache entry " + artifact.key() + " has a source named " + s.filename().string() +
-                               ", which cannot be exported");
-    files.push_back({name, detail::decompressFile(s)});
-  }
-  return files;
-}
 
 std::int64_t unixNow() {
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -95,30 +57,13 @@ class TarWriter {
   fs::path file_;
 };
 
-// The verified artifact for key, or an error saying why there is none.
-Artifact exportable(Cache& cache, const std::string& key) {
-  const std::optional<Entry> row = cache.entry(key);
-  if (!row) throw std::runtime_error("cache entry " + key + " is not in the cache (nothing exported)");
-  if (row->state != "ready")
-    throw std::runtime_error("cache entry " + key + " is still being built (nothing exported)");
-  if (std::optional<Artifact> a = cache.find(key)) return *a;
-  throw std::runtime_error("cache entry " + key + " failed verification and was moved to quarantine (nothing exported)");
-}
-
-// Adds one signed entry to the bundle.
+// Adds one signed entry, with its sources, to the bundle.
 void writeEntry(TarWriter& tar, const Artifact& artifact, const SigningKey& signer, std::int64_t now) {
-  const std::vector<MemberData> files = entryFiles(artifact);
-  EntryManifest m;
-  m.key = artifact.key();
-  m.info = artifact.entry().info;
-  m.signer = signer.keyId();
-  m.signed_at = now;
-  for (const MemberData& f : files) m.files.push_back({f.name, f.bytes.size(), sha256Hex(f.bytes)});
-  const std::string text = manifestText(m);
+  const SignedEntry entry = signEntry(artifact, signer, /*include_sources=*/true, now);
   const std::string dir = artifact.key() + "/";
-  tar.add(dir + kManifestName, text, now);
-  tar.add(dir + kSignatureName, toHex(signer.sign(text)) + "\n", now);
-  for (const MemberData& f : files) tar.add(dir + f.name, f.bytes, now);
+  tar.add(dir + kManifestName, entry.manifest, now);
+  tar.add(dir + kSignatureName, entry.signature_hex + "\n", now);
+  for (const EntryFile& f : entry.files) tar.add(dir + f.name, f.bytes, now);
 }
 
 }  // namespace
@@ -129,7 +74,7 @@ ExportReport exportBundle(Cache& cache, const std::vector<std::string>& keys, co
   std::vector<Artifact> artifacts;
   for (const std::string& key : keys)
     if (std::none_of(artifacts.begin(), artifacts.end(), [&](const Artifact& a) { return a.key() == key; }))
-      artifacts.push_back(exportable(cache, key));  // once each: a key named twice is one entry
+      artifacts.push_back(exportableArtifact(cache, key));  // once each: a key named twice is one entry
 
   const fs::path partial = out.string() + ".partial";
   const int fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

@@ -4,14 +4,10 @@
 // before its entry is verified, and then only through claim/publish.
 #include <archive.h>
 #include <archive_entry.h>
-#include <fcntl.h>
-#include <openssl/evp.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -21,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "artifact_files.hpp"
+#include "received_files.hpp"
 #include "robodiff/cache/artifact_bundle.hpp"
 #include "robodiff/cache/cache_key.hpp"
 #include "robodiff/cache/entry_manifest.hpp"
@@ -37,28 +34,8 @@ std::size_t ImportReport::count(ImportResult::Status status) const {
 namespace {
 
 constexpr std::uint64_t kMaxSignatureBytes = 1024;
-constexpr auto kClaimWait = std::chrono::seconds(30);
 
 using Archive = std::unique_ptr<archive, decltype(&archive_read_free)>;
-
-// A private directory under the system's temporary directory, removed with its contents.
-class ScratchDir {
- public:
-  ScratchDir() {
-    std::string pattern = (fs::temp_directory_path() / "robodiff-import-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr)
-      throw CacheError(CacheError::Kind::Io, "cannot create a temporary directory for the import: " +
-                                                 std::string(std::strerror(errno)));
-    path_ = pattern;
-  }
-  ~ScratchDir() { detail::removeTreeQuietly(path_); }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // One entry as its members arrive.
 struct Pending {
@@ -97,34 +74,17 @@ std::optional<std::string> readSmall(archive* a, std::string& error) {
 
 // Streams the current member into `to` (created 0600), measuring its size and SHA-256.
 std::optional<ReceivedEntry::File> readToFile(archive* a, const fs::path& to, std::string& error) {
-  const int fd = ::open(to.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) throw CacheError(CacheError::Kind::Io, "cannot create " + to.string() + ": " + std::strerror(errno));
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
-  ReceivedEntry::File file;
+  detail::HashingFile file(to);
   std::vector<char> buf(1 << 16);
   for (;;) {
     const la_ssize_t n = archive_read_data(a, buf.data(), buf.size());
-    if (n == 0) break;
+    if (n == 0) return file.finish();
     if (n < 0) {
       error = archiveError(a);
-      ::close(fd);
       return std::nullopt;
     }
-    if (::write(fd, buf.data(), static_cast<std::size_t>(n)) != n) {
-      const int err = errno;
-      ::close(fd);
-      throw CacheError(CacheError::Kind::Io, "cannot write " + to.string() + ": " + std::strerror(err));
-    }
-    EVP_DigestUpdate(ctx.get(), buf.data(), static_cast<std::size_t>(n));
-    file.size += static_cast<std::uint64_t>(n);
+    file.write(buf.data(), static_cast<std::size_t>(n));
   }
-  ::close(fd);
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned length = 0;
-  EVP_DigestFinal_ex(ctx.get(), digest, &length);
-  file.sha256 = toHex(std::string(reinterpret_cast<const char*>(digest), length));
-  return file;
 }
 
 // Refuses an entry while reading: its files are dropped at once.
@@ -271,49 +231,6 @@ class BundleReader {
   const BundleLimits& limits_;
 };
 
-// Files a verified entry through claim/publish; Present when it is there already.
-ImportResult install(Cache& cache, const EntryManifest& m, const fs::path& dir) {
-  ImportResult r;
-  r.key = m.key;
-  r.robot = m.info.robot;
-  r.function = m.info.function;
-  r.signer = m.signer;
-  ClaimResult claim = cache.waitOrClaim(m.key, m.info, std::chrono::steady_clock::now() + kClaimWait);
-  if (claim.state == ClaimResult::State::Ready) {
-    r.status = ImportResult::Status::Present;
-    return r;
-  }
-  if (claim.state == ClaimResult::State::Busy) {
-    r.problem = "being built by another process (" + claim.holder + "); try again when it is done";
-    return r;
-  }
-  ArtifactFiles files{dir / "library.so", dir / "description.json", {}};
-  for (const ManifestFile& f : m.files)
-    if (f.name.rfind("src/", 0) == 0) files.sources.push_back(dir / f.name);
-  std::string library_sha;
-  for (const ManifestFile& f : m.files)
-    if (f.name == "library.so") library_sha = f.sha256;
-  std::string published_sha;
-  try {
-    published_sha = cache.publish(*claim.claim, m.info, files).entry().library_sha256;  // the pin goes here
-  } catch (const std::exception& e) {
-    r.problem = std::string("could not be filed in the cache: ") + e.what();
-    return r;
-  }
-  // What landed is what was signed (the scratch copy cannot have changed in between).
-  if (published_sha != library_sha) {
-    try {
-      cache.remove(m.key);
-    } catch (const std::exception&) {
-      // In use already: find() verifies it against the index before every load.
-    }
-    r.problem = "library.so changed while it was filed in the cache; removed again";
-    return r;
-  }
-  r.status = ImportResult::Status::Imported;
-  return r;
-}
-
 }  // namespace
 
 ImportReport importBundle(Cache& cache, const fs::path& bundle, const TrustedKeys& trusted, const BundleLimits& limits) {
@@ -321,7 +238,7 @@ ImportReport importBundle(Cache& cache, const fs::path& bundle, const TrustedKey
   archive_read_support_format_tar(a.get());
   if (archive_read_open_filename(a.get(), bundle.c_str(), 1 << 16) != ARCHIVE_OK)
     throw std::runtime_error("cannot open the bundle " + bundle.string() + ": " + archiveError(a.get()));
-  ScratchDir scratch;
+  detail::ScratchDir scratch("import");
   Contents contents;
   const bool complete = BundleReader(a.get(), scratch.path(), limits).read(contents);
   a.reset();
@@ -334,7 +251,7 @@ ImportReport importBundle(Cache& cache, const fs::path& bundle, const TrustedKey
       continue;
     }
     const ManifestCheck check = verifyReceivedEntry(p.received, trusted);
-    report.entries.push_back(check.manifest ? install(cache, *check.manifest, p.dir) : refused(key, check.problem));
+    report.entries.push_back(check.manifest ? installVerifiedEntry(cache, *check.manifest, p.dir) : refused(key, check.problem));
     detail::removeTreeQuietly(p.dir);
   }
   // Cut short: at an entry boundary, bundle.json (written last) is what is missing.

@@ -106,30 +106,35 @@ EntryManifest parseManifest(const std::string& text) {
   return m;
 }
 
+ManifestCheck verifySignedManifest(const std::string& manifest, const std::string& signature_hex,
+                                   const TrustedKeys& trusted) {
+  std::string hex = signature_hex;
+  while (!hex.empty() && (hex.back() == '\n' || hex.back() == '\r')) hex.pop_back();
+  if (!isHex(hex, 128)) return {std::nullopt, "bad signature: manifest.sig is not 128 lowercase hex digits"};
+  // The signer's id is read before the signature is checked only to choose the key.
+  const json j = json::parse(manifest, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("signer") || !j["signer"].is_string())
+    return {std::nullopt, "bad signature: manifest.json is not a signed manifest (no signer)"};
+  const std::string signer = j["signer"];
+  const PublicKey* key = trusted.find(signer);
+  if (key == nullptr) return {std::nullopt, "unknown key: signed by key " + signer + ", which is not trusted here"};
+  if (!key->verify(manifest, fromHex(hex)))
+    return {std::nullopt, "bad signature: manifest.json's signature does not verify with key " + signer +
+                              " (the manifest or its signature was altered)"};
+  try {
+    return {parseManifest(manifest), ""};
+  } catch (const std::exception& e) {
+    return {std::nullopt, std::string("malformed manifest (signed by ") + signer + "): " + e.what()};
+  }
+}
+
 namespace {
 
 // The trusted, parsed manifest of `entry`, or the reason it is not one.
 ManifestCheck checkSignature(const ReceivedEntry& entry, const TrustedKeys& trusted) {
   if (!entry.manifest) return {std::nullopt, "unsigned: it has no manifest.json"};
   if (!entry.signature) return {std::nullopt, "unsigned: it has no manifest.sig"};
-  std::string hex = *entry.signature;
-  while (!hex.empty() && (hex.back() == '\n' || hex.back() == '\r')) hex.pop_back();
-  if (!isHex(hex, 128)) return {std::nullopt, "bad signature: manifest.sig is not 128 lowercase hex digits"};
-  // The signer's id is read before the signature is checked only to choose the key.
-  const json j = json::parse(*entry.manifest, nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("signer") || !j["signer"].is_string())
-    return {std::nullopt, "bad signature: manifest.json is not a signed manifest (no signer)"};
-  const std::string signer = j["signer"];
-  const PublicKey* key = trusted.find(signer);
-  if (key == nullptr) return {std::nullopt, "unknown key: signed by key " + signer + ", which is not trusted here"};
-  if (!key->verify(*entry.manifest, fromHex(hex)))
-    return {std::nullopt, "bad signature: manifest.json's signature does not verify with key " + signer +
-                              " (the manifest or its signature was altered)"};
-  try {
-    return {parseManifest(*entry.manifest), ""};
-  } catch (const std::exception& e) {
-    return {std::nullopt, std::string("malformed manifest (signed by ") + signer + "): " + e.what()};
-  }
+  return verifySignedManifest(*entry.manifest, *entry.signature, trusted);
 }
 
 }  // namespace

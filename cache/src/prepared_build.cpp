@@ -1,8 +1,10 @@
 #include "robodiff/cache/prepared_build.hpp"
 
+#include <iterator>
 #include <map>
 #include <mutex>
 
+#include "robodiff/cache/target_check.hpp"
 #include "robodiff/codegen/compiler.hpp"
 
 namespace robodiff::cache {
@@ -75,6 +77,20 @@ PreparedBuild prepareWithoutCompiler(const std::string& model_hash, const Functi
 std::string preparePortableKey(const std::string& model_hash, const FunctionSpec& spec,
                                const std::string& function_name) {
   return prepareWithoutCompiler(model_hash, spec, function_name, "").info.portable_key;
+}
+
+std::vector<std::string> portableKeysFor(const std::string& model_hash, const FunctionSpec& spec,
+                                         const std::string& function_name) {
+  std::vector<std::string> keys{preparePortableKey(model_hash, spec, function_name)};
+  if (!spec.build.target.empty() || !spec.build.march_native) return keys;
+  FunctionSpec for_level = spec;
+  for_level.build.march_native = false;  // as parseFunctionSpec stores a level
+  for (auto level = std::rbegin(kTargetLevels); level != std::rend(kTargetLevels); ++level) {
+    if (!cpuSupportsLevel(*level)) continue;
+    for_level.build.target = *level;
+    keys.push_back(preparePortableKey(model_hash, for_level, function_name));
+  }
+  return keys;
 }
 
 PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,

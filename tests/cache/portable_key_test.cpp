@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+#include <string>
+#include <vector>
+
 #include <nlohmann/json.hpp>
 
 #include "cache_fixtures.hpp"
@@ -64,6 +68,28 @@ TEST(PortableKey, IsPreparedWithoutACompiler) {
   EXPECT_EQ(prepared.info.portable_key, portable);
   EXPECT_EQ(prepared.identity.portableKey(), portable);
   EXPECT_NE(preparePortableKey(hash, spec, "arm_rnea"), portable) << "the C name is in the library";
+}
+
+// A spec's own key first, then the same spec built for each x86-64 level this CPU runs,
+// highest first, each as parseFunctionSpec makes a spec naming that level.
+TEST(PortableKey, ForASpecAskingForNativeAlsoEveryLevelThisCpuRuns) {
+  const std::string hash = sha256Hex("a model");
+  const std::string body = R"({"function": "rnea", "outputs": [{"kind": "value"}])";
+  const FunctionSpec native = parseFunctionSpec(body + "}", "spec");
+  std::vector<std::string> expected{preparePortableKey(hash, native, "")};
+  for (const std::string level : {"x86-64-v4", "x86-64-v3", "x86-64-v2"})
+    if (cpuSupportsLevel(level))
+      expected.push_back(
+          preparePortableKey(hash, parseFunctionSpec(body + R"(, "build": {"target": ")" + level + R"("}})", level), ""));
+  const std::vector<std::string> keys = portableKeysFor(hash, native, "");
+  EXPECT_EQ(keys, expected);
+  EXPECT_EQ(std::set<std::string>(keys.begin(), keys.end()).size(), keys.size()) << "one key per level";
+  EXPECT_EQ(portableKeysFor(hash, native, "arm_rnea").front(), preparePortableKey(hash, native, "arm_rnea"));
+  // A spec that names its target (a level, or any x86-64) has just its own key.
+  for (const std::string target : {"x86-64-v2", "x86-64"}) {
+    const FunctionSpec named = parseFunctionSpec(body + R"(, "build": {"target": ")" + target + R"("}})", target);
+    EXPECT_EQ(portableKeysFor(hash, named, ""), std::vector<std::string>{preparePortableKey(hash, named, "")}) << target;
+  }
 }
 
 // An entry with `portable_key` built for `target` (a targetLabel).

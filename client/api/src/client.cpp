@@ -131,7 +131,7 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
     // the default compiler), computed from the model parsed and hashed here.
     std::string key_problem;
     try {
-      f->portable_key = cache::preparePortableKey(model.id, f->spec, "");  // needs no compiler
+      f->portable_keys = cache::portableKeysFor(model.id, f->spec, "");  // needs no compiler
       f->key = cache::prepareBuild(*c.localModel(model.id), model.id, f->spec, "", "").key;
     } catch (const ClientError&) {
       throw;
@@ -140,7 +140,7 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
     }
     std::string problem = key_problem;
     bool local = false;
-    if (!f->key.empty() || !f->portable_key.empty()) {
+    if (!f->key.empty() || !f->portable_keys.empty()) {
       std::lock_guard lock(f->switch_mutex);
       local = f->tryLoadLocal(&problem);
     }
@@ -154,7 +154,7 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
       f->layout = f->local.load()->layout();
       f->id = sha256Hex(model.id + "\n" + normalizedSpecJson(f->spec)).substr(0, 32);
       f->layout.function_id = f->id;
-    } else if (!local && (!f->key.empty() || !f->portable_key.empty())) {
+    } else if (!local && (!f->key.empty() || !f->portable_keys.empty())) {
       // Not in the cache (yet): the server compiles it, or our copy was refused.
       const std::optional<rpc::FunctionSummary> summary = c.summary(f->id);
       const bool server_compiled = summary && summary->compiled;
@@ -178,7 +178,7 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
                                    .count() +
                                100'000'000);
       }
-    } else if (c.requested == Mode::Local && f->key.empty() && f->portable_key.empty()) {
+    } else if (c.requested == Mode::Local && f->key.empty() && f->portable_keys.empty()) {
       throw ClientError({StatusCode::FailedPrecondition,
                          "mode local: the cache key of function " + f->id + " cannot be computed here: " + key_problem});
     }

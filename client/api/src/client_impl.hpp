@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "robodiff/runtime/function_layout.hpp"
 #include "async_executor.hpp"
@@ -103,9 +104,10 @@ struct Function::Impl {
   // Not local yet but may become so: the cache is looked at again at most every 100 ms.
   bool local_candidate = false;
   std::string key;  // the cache key (empty: unknown, e.g. no compiler here)
-  // The portable key (cache_key.hpp): finds a library built elsewhere (imported), with
-  // another compiler or none here. Both empty: never local.
-  std::string portable_key;
+  // The portable keys (cache::portableKeysFor), tried in order: find a library built
+  // elsewhere (imported or fetched, perhaps for an x86-64 level), with another compiler or
+  // none here. Both empty: never local.
+  std::vector<std::string> portable_keys;
   std::atomic<std::int64_t> next_check_ns{0};
   std::mutex switch_mutex;
 

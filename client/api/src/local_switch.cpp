@@ -18,13 +18,14 @@ constexpr std::int64_t kCheckEveryNs = 100'000'000;
 bool Function::Impl::tryLoadLocal(std::string* problem) {
   if (local.load(std::memory_order_acquire) != nullptr) return true;
   Client::Impl& c = *client;
-  if (!c.cache || (key.empty() && portable_key.empty())) return false;
+  if (!c.cache || (key.empty() && portable_keys.empty())) return false;
   std::optional<cache::Artifact> artifact;
   try {
     std::lock_guard lock(c.cache_mutex);
     if (!key.empty()) artifact = c.cache->find(key);  // verifies the SHA-256; a mismatch is quarantined: a miss
     // Built elsewhere (imported), by another compiler than this host's, or none here.
-    if (!artifact && !portable_key.empty()) artifact = c.cache->findPortable(portable_key);
+    for (const std::string& portable : portable_keys)
+      if (!artifact) artifact = c.cache->findPortable(portable);
   } catch (const std::exception& e) {
     if (problem != nullptr) *problem = std::string("the cache: ") + e.what();
     return false;

@@ -22,6 +22,7 @@
 
 #include "robodiff/cache/artifact_signing.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/cache/entry_transfer.hpp"  // ImportResult
 
 namespace robodiff::cache {
 
@@ -43,15 +44,6 @@ struct ExportReport {
 // verification, and CacheError(Io) when the file cannot be written.
 ExportReport exportBundle(Cache& cache, const std::vector<std::string>& keys, const SigningKey& signer,
                           const std::filesystem::path& out);
-
-struct ImportResult {
-  enum class Status : std::uint8_t { Imported, Present, Refused };
-  std::string key;  // as named in the bundle (its directory), or a member's name when it had none
-  Status status = Status::Refused;
-  std::string robot, function;  // from the signed manifest (empty when refused before it was trusted)
-  std::string signer;           // key id, when verified
-  std::string problem;          // Refused: what was wrong
-};
 
 struct ImportReport {
   std::vector<ImportResult> entries;  // in bundle order

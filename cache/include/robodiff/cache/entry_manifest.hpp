@@ -64,5 +64,9 @@ struct ManifestCheck {
   std::string problem;
 };
 ManifestCheck verifyReceivedEntry(const ReceivedEntry& entry, const TrustedKeys& trusted);
+// The signature part of that check alone, before any file has arrived: `signature_hex`
+// (a newline allowed) by a trusted key over `manifest`, which then parses.
+ManifestCheck verifySignedManifest(const std::string& manifest, const std::string& signature_hex,
+                                   const TrustedKeys& trusted);
 
 }  // namespace robodiff::cache

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/cache/cache_key.hpp"
@@ -34,5 +35,13 @@ PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, co
 // running a compiler: what a host that has none looks an imported or fetched library up by.
 std::string preparePortableKey(const std::string& model_hash, const FunctionSpec& spec,
                                const std::string& function_name);
+
+// The portable keys under which a library computing `spec` may be found for this CPU: the
+// spec's own (preparePortableKey), then, when the spec names no target and asks for
+// march_native (the default), the same spec built for each x86-64 level this CPU supports
+// (kTargetLevels, cpuSupportsLevel), highest first: what a robot host fetched from a build
+// host, which compiles for a level, never for `native`.
+std::vector<std::string> portableKeysFor(const std::string& model_hash, const FunctionSpec& spec,
+                                         const std::string& function_name);
 
 }  // namespace robodiff::cache
