@@ -29,9 +29,11 @@ toml::node_type documentedType(const std::string& key) {
       "max_functions", "max_urdf_depth", "max_urdf_elements", "max_urdf_links", "max_urdf_joints",
       "max_urdf_name_length", "max_urdf_attribute_length", "max_queued_requests_per_client",
       "max_running_requests_per_client", "error_replies_per_second", "max_shm_sessions", "max_models_per_client",
-      "max_functions_per_client", "workers"};
+      "max_functions_per_client", "workers", "max_builds_per_robot"};
   const std::string name = key.substr(key.find('.') + 1);
-  if (name == "enabled" || name == "compile" || name == "allow_unauthenticated") return toml::node_type::boolean;
+  if (name == "enabled" || name == "compile" || name == "allow_unauthenticated" || name == "build_for_robots" ||
+      name == "fetch_sources")
+    return toml::node_type::boolean;
   for (const auto& c : counts)
     if (name == c) return toml::node_type::integer;
   return toml::node_type::string;  // names, paths, choices, sizes, durations, "default"

@@ -147,6 +147,20 @@ std::vector<std::string> parseNameList(const std::string& value) {
   return names;
 }
 
+std::vector<std::string> parseServiceNames(const std::string& value) {
+  std::vector<std::string> names;
+  std::stringstream in(value);
+  for (std::string name; std::getline(in, name, ',');) {
+    name = trim(name);
+    if (name.empty()) continue;
+    for (const char ch : name)
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_')
+        throw std::invalid_argument("names '" + name + "', which is not a DDS service name (letters, digits, '_')");
+    names.push_back(name);
+  }
+  return names;
+}
+
 std::string formatNameList(const std::vector<std::string>& names) {
   std::string text;
   for (const auto& n : names) text += (text.empty() ? "" : ", ") + n;

@@ -34,6 +34,8 @@ std::string formatDirectoryList(const std::vector<std::filesystem::path>& dirs);
 // "a, b": host names (letters, digits, '-', '.').
 std::vector<std::string> parseNameList(const std::string& value);
 std::string formatNameList(const std::vector<std::string>& names);
+// "build_a, build_b": DDS service names (letters, digits, '_'; topics are "<name>_request").
+std::vector<std::string> parseServiceNames(const std::string& value);
 
 // A TOML basic string: "..." with '"', '\' and control characters escaped.
 std::string tomlString(const std::string& text);

@@ -42,6 +42,7 @@
 #include "robodiff/server/shm_server.hpp"
 #include "dds_exposure.hpp"
 #include "dds_socket_binding.hpp"
+#include "fleet_setup.hpp"
 #include "pause_monitor.hpp"
 #include "roudi_watch.hpp"
 #include "server_config.hpp"
@@ -229,7 +230,7 @@ robodiff::Status validateJob(const std::string& kind, const std::string& params_
 class Daemon {
  public:
   Daemon(ServerConfig& config, Logger& log, robodiff::dds_codec::DdsSecurity dds_security)
-      : config_(config), log_(log), dds_security_(std::move(dds_security)), service_(withJobValidation(config), log) {}
+      : config_(config), log_(log), dds_security_(std::move(dds_security)), service_(serviceOptions(config, log), log) {}
 
   void start() {
     if (config_.shm.enabled) startShm();
@@ -268,9 +269,10 @@ class Daemon {
   }
 
  private:
-  static ServiceOptions withJobValidation(const ServerConfig& config) {
+  static ServiceOptions serviceOptions(const ServerConfig& config, Logger& log) {
     ServiceOptions options = config.service;
     options.validate_job = validateJob;
+    applyFleetSettings(config, options, log);
     return options;
   }
 
@@ -431,6 +433,9 @@ int main(int argc, char** argv) {
     int sig = 0;
     sigwait(&stop_signals, &sig);
     return daemon.drainAndStop(sig, flags.drain_timeout_s);
+  } catch (const ConfigError& e) {  // the settings do not fit together (e.g. [fleet]'s role)
+    log.error("startup_refused", {{"message", e.what()}});
+    return 2;
   } catch (const std::exception& e) {
     log.error("startup_failed", {{"message", e.what()}});
     return 1;

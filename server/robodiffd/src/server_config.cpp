@@ -161,6 +161,35 @@ std::vector<Setting> httpAndLogSettings() {
   };
 }
 
+std::vector<Setting> fleetSettings() {
+  return {
+      {"fleet.role", ValueKind::Text,
+       [](ServerConfig& c, const std::string& v) {
+         if (v != "standalone" && v != "build" && v != "robot")
+           throw std::invalid_argument("is not one of standalone, build, robot");
+         c.fleet.role = v;
+       },
+       [](const ServerConfig& c) { return c.fleet.role; }},
+      textSetting("fleet.signing_key", [](auto& c) -> auto& { return c.fleet.signing_key; }),
+      flagSetting("fleet.build_for_robots", [](auto& c) -> auto& { return c.fleet.build_for_robots; }),
+      countSetting("fleet.max_builds_per_robot", [](auto& c) -> auto& { return c.fleet.max_builds_per_robot; }, 1, 1024),
+      sizeSetting("fleet.chunk_size", [](auto& c) -> auto& { return c.fleet.chunk_size; }),
+      durationSetting("fleet.chunk_delay", [](auto& c) -> auto& { return c.fleet.chunk_delay; }),
+      {"fleet.build_hosts", ValueKind::Text,
+       [](ServerConfig& c, const std::string& v) { c.fleet.build_hosts = parseServiceNames(v); },
+       [](const ServerConfig& c) { return formatNameList(c.fleet.build_hosts); }},
+      {"fleet.trusted_keys", ValueKind::Text,
+       [](ServerConfig& c, const std::string& v) { c.fleet.trusted_keys = parseDirectoryList(v); },
+       [](const ServerConfig& c) { return formatDirectoryList(c.fleet.trusted_keys); }},
+      textSetting("fleet.target", [](auto& c) -> auto& { return c.fleet.target; }),
+      textSetting("fleet.security_identity", [](auto& c) -> auto& { return c.fleet.security_identity; }),
+      flagSetting("fleet.fetch_sources", [](auto& c) -> auto& { return c.fleet.fetch_sources; }),
+      durationSetting("fleet.call_timeout", [](auto& c) -> auto& { return c.fleet.call_timeout; }),
+      durationSetting("fleet.build_wait", [](auto& c) -> auto& { return c.fleet.build_wait; }),
+      sizeSetting("fleet.max_artifact", [](auto& c) -> auto& { return c.fleet.max_artifact; }),
+  };
+}
+
 // How --print-config writes a value: counts, flags and domain numbers bare, the rest as
 // TOML strings.
 std::string tomlValue(const Setting& setting, const std::string& text) {
@@ -175,7 +204,7 @@ const std::vector<Setting>& settings() {
   static const std::vector<Setting> table = [] {
     std::vector<Setting> all;
     for (auto part : {serviceSettings(), limitSettings(), buildAndJobSettings(), transportSettings(),
-                      httpAndLogSettings()})
+                      httpAndLogSettings(), fleetSettings()})
       all.insert(all.end(), part.begin(), part.end());
     return all;
   }();

@@ -10,7 +10,9 @@
 // one that does not parse, and a TOML syntax error are errors naming the file, the line
 // and column, the key and the value.
 
+#include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,12 +55,33 @@ struct ClientLimits {
   std::uint32_t max_shm_sessions = 64;                 // iceoryx connections (sessions) open at once
 };
 
+// A fleet (docs/fleet.md): build hosts compile and sign, robot hosts fetch over DDS.
+struct FleetSettings {
+  std::string role = "standalone";  // standalone | build | robot
+  // role = build
+  std::string signing_key;          // Ed25519 private key file (robodiff keygen)
+  bool build_for_robots = true;     // build what a robot asks for and this host lacks
+  std::uint32_t max_builds_per_robot = 4;
+  std::uint64_t chunk_size = 256 * 1024;
+  std::chrono::milliseconds chunk_delay{0};  // failover drills and tests only
+  // role = robot
+  std::vector<std::string> build_hosts;  // the build hosts' dds.service names, preferred first
+  std::vector<std::filesystem::path> trusted_keys;  // public key files or directories of *.pub
+  std::string target = "auto";           // auto | x86-64-v2 | x86-64-v3 | x86-64-v4
+  std::string security_identity;         // with dds.security: this robot's client identity
+  bool fetch_sources = false;
+  std::chrono::milliseconds call_timeout = std::chrono::seconds(5);
+  std::chrono::milliseconds build_wait = std::chrono::minutes(20);
+  std::uint64_t max_artifact = std::uint64_t{256} << 20;
+};
+
 struct ServerConfig {
   ServiceOptions service;
   ClientLimits limits;
   ShmSettings shm;
   DdsSettings dds;
   HttpSettings http;
+  FleetSettings fleet;
   LogLevel log_level = LogLevel::Info;
   LogFormat log_format = LogFormat::Json;
 };

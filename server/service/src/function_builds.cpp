@@ -47,6 +47,8 @@ FunctionBuilds::FunctionBuilds(BuildSettings settings, cache::Cache& cache, work
                      [this](const std::string& what) {
                        log_.error("internal_error", {{"message", what}});
                      }),
+      fetch_queue_("fetch", settings_.source ? std::max(1u, settings_.fetch_threads) : 1u, 0,
+                   [this](const std::string& what) { log_.error("internal_error", {{"message", what}}); }),
       trace_queue_("trace", std::max(1u, settings_.trace_threads), 0, [this](const std::string& what) {
         log_.error("internal_error", {{"message", what}});
       }) {}
@@ -63,6 +65,7 @@ void FunctionBuilds::start(std::shared_ptr<FunctionEntry> function) {
 void FunctionBuilds::stop() {
   if (stopping_.exchange(true)) return;
   trace_queue_.stop();  // traces not started fail at once (stopping_)
+  fetch_queue_.stop();  // fetches see stopping_ and give up
   // Builds not started are skipped (stopping_); running ones are cancelled (their workers
   // are killed, the builder abandons their claims) until none is left.
   while (!compile_queue_.idle()) {
@@ -87,6 +90,7 @@ BuildFigures FunctionBuilds::figures() const {
   f.builds_done = builds_done_.load(std::memory_order_relaxed);
   f.build_retries = builder_.workerDeathRetries();
   f.specs_invalid = specs_invalid_.load(std::memory_order_relaxed);
+  f.libraries_fetched = libraries_fetched_.load(std::memory_order_relaxed);
   return f;
 }
 
@@ -195,9 +199,13 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
     failFunction(function, std::move(failure), stage);
     return;
   }
-  // Counted as queued before it is READY: whoever sees it READY sees its build coming.
+  // Counted as queued (or fetching) before it is READY: whoever sees it READY sees its
+  // library coming.
   const bool build = settings_.compile && key_problem.empty();
-  if (build) {
+  const bool fetching = settings_.source != nullptr;
+  if (fetching) {
+    f.setCompileStage(CompileStage::Fetching);
+  } else if (build) {
     builds_queued_.fetch_add(1, std::memory_order_relaxed);
     f.setCompileStage(CompileStage::Queued);
   }
@@ -209,6 +217,10 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
                                 {"instructions", instructions},
                                 {"nodes", nodes}});
 
+  if (fetching) {
+    fetch_queue_.post([this, function, build] { fetch(function, build); });
+    return;
+  }
   if (!settings_.compile) return;
   if (!build) {
     buildFailed(function, "the library cannot be built: " + key_problem);
@@ -218,14 +230,51 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
     builds_queued_.fetch_sub(1, std::memory_order_relaxed);
 }
 
+void FunctionBuilds::fetch(const std::shared_ptr<FunctionEntry>& function, bool may_compile) {
+  FunctionEntry& f = *function;
+  const auto started = Clock::now();
+  const ArtifactOrder order{f.id(), f.model().id, f.model().urdf, f.model().floating_base, &f.spec()};
+  ArtifactDelivery delivery;
+  try {
+    delivery = settings_.source->fetch(order, cache_, [&] { return stopping_.load() || f.unloaded(); });
+  } catch (const std::exception& e) {
+    delivery.message = std::string("the fetch failed inside the server: ") + e.what();
+  }
+  if (stopping_ || f.unloaded()) return;
+  if (delivery.delivered()) {
+    workers::BuildStatus status;
+    status.key = delivery.key;
+    status.state = workers::BuildState::Cached;
+    status.seconds = secondsSince(started);
+    swapIn(function, status, true);
+    return;
+  }
+  log_.warn("fetch_failed", {{"function_id", f.id()},
+                             {"message", delivery.message},
+                             {"next", may_compile ? "building it here" : "the interpreter keeps serving"}});
+  if (may_compile) {
+    builds_queued_.fetch_add(1, std::memory_order_relaxed);
+    f.setCompileStage(CompileStage::Queued);
+    if (!compile_queue_.post([this, function] { compile(function); }))
+      builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+    return;
+  }
+  buildFailed(function, "no build host delivered the library (" + delivery.message + ")" +
+                            (settings_.compile ? "" : "; this host compiles nothing (build.compile = false)"));
+}
+
 bool FunctionBuilds::loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key) {
   return loadArtifact(function, "cache", [&] { return cache_.find(key); });
 }
 
 bool FunctionBuilds::loadPortable(const std::shared_ptr<FunctionEntry>& function) {
   const FunctionEntry& f = *function;
-  return loadArtifact(function, "cache by portable key", [&] {
-    return cache_.findPortable(cache::preparePortableKey(f.model().id, f.spec(), ""));
+  // The spec's own portable key, then the x86-64 levels this CPU runs (what a fleet's
+  // build host compiled for this robot).
+  return loadArtifact(function, "cache by portable key", [&]() -> std::optional<cache::Artifact> {
+    for (const std::string& key : cache::portableKeysFor(f.model().id, f.spec(), ""))
+      if (std::optional<cache::Artifact> artifact = cache_.findPortable(key)) return artifact;
+    return std::nullopt;
   });
 }
 
@@ -345,7 +394,8 @@ void FunctionBuilds::refill(const std::shared_ptr<FunctionEntry>& function, cons
   f.endRefill();
 }
 
-void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status) {
+void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status,
+                            bool fetched) {
   FunctionEntry& f = *function;
   try {
     const std::optional<cache::Artifact> artifact = cache_.find(status.key);
@@ -364,6 +414,12 @@ void FunctionBuilds::swapIn(const std::shared_ptr<FunctionEntry>& function, cons
     f.setCompileStage(CompileStage::Compiled);
   } catch (const std::exception& e) {
     buildFailed(function, std::string("the built library cannot be used: ") + e.what());
+    return;
+  }
+  if (fetched) {
+    libraries_fetched_.fetch_add(1, std::memory_order_relaxed);
+    log_.info("function_fetched", {{"function_id", f.id()}, {"key", status.key}, {"seconds", status.seconds}});
+    log_.info("function_swapped", {{"function_id", f.id()}, {"from", "interpreter"}, {"to", "compiled"}});
     return;
   }
   builds_done_.fetch_add(1, std::memory_order_relaxed);

@@ -3,6 +3,9 @@
 //   1. trace stage (its own threads): with compiling on, look in the cache first; a hit
 //      loads the library (READY, compiled). A miss traces the function and serves it with
 //      the interpreter at once (READY, interpreted), then hands it to
+//   1b. fetch stage (a robot host of a fleet, its own threads): the build hosts are asked
+//      for the library; one delivered is loaded and swapped in like a built one; when
+//      none can deliver, the compile stage builds it here (if compiling is on).
 //   2. compile stage (one thread per build worker, one library build per function; the
 //      worker pool queues them): the CachedBuilder builds the library into the cache;
 //      on success it is loaded and swapped in, on failure the interpreter keeps serving
@@ -25,6 +28,7 @@
 #include <vector>
 
 #include "function_entry.hpp"
+#include "robodiff/server/artifact_source.hpp"
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/model/urdf_limits.hpp"
 #include "robodiff/server/log.hpp"
@@ -42,6 +46,9 @@ struct BuildSettings {
   unsigned trace_threads = 2;
   unsigned compile_threads = 1;
   UrdfLimits urdf_limits;  // LoadModel's (max_bytes capped by max_urdf_bytes), for the workers
+  // A robot host's build hosts (artifact_source.hpp): asked before this host compiles.
+  std::shared_ptr<ArtifactSource> source;
+  unsigned fetch_threads = 2;
 };
 
 struct BuildFigures {
@@ -49,6 +56,7 @@ struct BuildFigures {
   std::uint32_t builds_queued = 0, builds_running = 0, builds_failed = 0, builds_done = 0;
   std::uint64_t build_retries = 0;  // builds tried again after their worker died
   std::uint64_t specs_invalid = 0;  // functions failed as invalid specs (never built; not in builds_failed)
+  std::uint64_t libraries_fetched = 0;  // delivered by a build host (robot host)
 };
 
 // Where a function failed.
@@ -105,9 +113,12 @@ class FunctionBuilds {
   bool loadArtifact(const std::shared_ptr<FunctionEntry>& function, const char* source,
                     const std::function<std::optional<cache::Artifact>()>& lookUp);
   void compile(const std::shared_ptr<FunctionEntry>& function);
+  void fetch(const std::shared_ptr<FunctionEntry>& function, bool may_compile);
   void refill(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
   static workers::BuildTarget buildTarget(const FunctionEntry& function);
-  void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status);
+  // `fetched`: delivered by a build host, not built here.
+  void swapIn(const std::shared_ptr<FunctionEntry>& function, const workers::BuildStatus& status,
+              bool fetched = false);
   void buildFailed(const std::shared_ptr<FunctionEntry>& function, const std::string& message);
   void cancelRunningBuilds();
   void keepFailure(const FunctionEntry& function, const std::string& message, FailureStage stage, Status status);
@@ -124,13 +135,14 @@ class FunctionBuilds {
 
   std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};
   std::atomic<std::uint32_t> builds_queued_{0}, builds_running_{0}, builds_failed_{0}, builds_done_{0};
-  std::atomic<std::uint64_t> specs_invalid_{0};
+  std::atomic<std::uint64_t> specs_invalid_{0}, libraries_fetched_{0};
   mutable std::mutex failures_mutex_;
   std::deque<BuildFailureRecord> failures_;  // newest first
 
   // Last: their threads use everything above and are joined first.
   TaskQueue compile_queue_;
-  TaskQueue trace_queue_;
+  TaskQueue fetch_queue_;  // posts to compile_queue_
+  TaskQueue trace_queue_;  // posts to both
 };
 
 }  // namespace robodiff::server::detail

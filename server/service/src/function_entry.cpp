@@ -5,6 +5,7 @@ namespace robodiff::server::detail {
 const char* toString(CompileStage stage) {
   switch (stage) {
     case CompileStage::None: return "none";
+    case CompileStage::Fetching: return "fetching";
     case CompileStage::Queued: return "queued";
     case CompileStage::Compiling: return "compiling";
     case CompileStage::Compiled: return "compiled";

@@ -24,6 +24,7 @@ namespace robodiff::server::detail {
 // Where a READY function's compiled library stands (the dashboard's compile state).
 enum class CompileStage : std::uint8_t {
   None,       // no library coming: compiling is off, or not decided yet
+  Fetching,   // asking the fleet's build hosts for it (the interpreter serves meanwhile)
   Queued,     // waiting for a build worker
   Compiling,  // a worker builds it
   Compiled,   // the library serves (built here, or found in the cache)

@@ -40,28 +40,13 @@ detail::BuildSettings buildSettings(const ServiceOptions& o) {
   s.compile_threads = std::max(1u, o.build_workers);  // one build per worker; the pool queues the rest
   s.trace_threads = 2;  // a long trace (a humanoid's Hessian) does not hold up every other function
   s.urdf_limits = o.urdf_limits;
+  s.source = o.artifact_source;
   s.urdf_limits.max_bytes = std::min<std::uint64_t>(s.urdf_limits.max_bytes, o.max_urdf_bytes);
   return s;
 }
 
 unsigned batchThreads(const ServiceOptions& o) {
   return o.batch_threads != 0 ? o.batch_threads : std::max(1u, std::thread::hardware_concurrency());
-}
-
-// Every request method answers with a status, never an exception: a transport's thread
-// must survive whatever goes wrong inside.
-template <class Body>
-Status guarded(Logger& log, const char* method, Body&& body) {
-  try {
-    return body();
-  } catch (const std::exception& e) {
-    const std::string what = language::boundedText(e.what(), detail::kMaxErrorBytes);
-    log.error("internal_error", {{"method", method}, {"message", what}});
-    return {StatusCode::Internal, std::string(method) + " failed inside the server: " + what};
-  } catch (...) {
-    log.error("internal_error", {{"method", method}, {"message", "unknown exception"}});
-    return {StatusCode::Internal, std::string(method) + " failed inside the server (unknown exception)"};
-  }
 }
 
 void fillFunctionReply(const detail::FunctionEntry& f, rpc::GetFunctionReply& reply) {
@@ -114,6 +99,8 @@ Status parsePageToken(const std::string& token, std::uint64_t& first_sequence) {
 
 }  // namespace
 
+using detail::guarded;
+
 namespace detail {
 Status deadlineExceeded(const CallContext& ctx, const char* method) {
   const auto late = std::chrono::duration<double, std::milli>(Clock::now() - ctx.deadline).count();
@@ -137,6 +124,9 @@ Service::State::State(ServiceOptions o, Logger& l)
           "request", std::max(1u, options.request_threads), std::max<std::size_t>(1, options.request_queue_capacity),
           [this](const std::string& what) { log.error("internal_error", {{"message", what}}); },
           options.background_nice) {
+  if (options.artifact_serving.enabled)
+    artifacts = std::make_unique<detail::ArtifactServing>(options.artifact_serving, buildSettings(options), cache,
+                                                          pool, log);
   if (options.job_workers > 0) {
     JobManagerOptions j;
     j.cache_dir = cache.dir();
@@ -174,6 +164,7 @@ Service::~Service() {
   s.serving.store(rpc::ServingState::Draining);
   s.requests.stop();  // runs what was posted, then joins the request threads
   while (s.in_flight.load(std::memory_order_acquire) != 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  if (s.artifacts) s.artifacts->stop();  // cancels robots' builds still running
   s.builds.stop();  // cancels library builds still running
   s.jobs.reset();   // cancels jobs still running (they end FAILED: robodiffd stopped)
   s.log.info("service_stopped", {{"instance_id", s.instance_id},

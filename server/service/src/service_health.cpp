@@ -104,6 +104,7 @@ ServiceMetrics Service::metrics() const {
     m.methods.push_back(std::move(f));
   }
   m.transports = s.stats.transports();
+  m.fleet = fleet();
 
   m.cache_stats_ok = fillServiceFigures(s, m);
   if (s.jobs) {

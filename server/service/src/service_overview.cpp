@@ -34,6 +34,7 @@ const char* phaseOf(const detail::FunctionEntry& f) {
   }
   if (f.compiled()) return "compiled";
   switch (f.compileStage()) {
+    case detail::CompileStage::Fetching: return "fetching";
     case detail::CompileStage::Queued: return "queued";
     case detail::CompileStage::Compiling: return "compiling";
     case detail::CompileStage::Failed: return "build-failed";

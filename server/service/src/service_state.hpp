@@ -8,11 +8,13 @@
 #include <memory>
 #include <string>
 
+#include "artifact_serving.hpp"
 #include "batch_runner.hpp"
 #include "function_builds.hpp"
 #include "registry.hpp"
 #include "request_stats.hpp"
 #include "robodiff/cache/cache.hpp"
+#include "robodiff/language/bounded_text.hpp"
 #include "robodiff/server/job_manager.hpp"
 #include "robodiff/server/service.hpp"
 #include "robodiff/workers/worker_pool.hpp"
@@ -37,6 +39,7 @@ struct Service::State {
   detail::Registry registry{{options.max_models_per_client, options.max_functions_per_client}};
   detail::RequestStats stats;
   detail::FunctionBuilds builds;
+  std::unique_ptr<detail::ArtifactServing> artifacts;  // null: not a build host
   detail::BatchRunner batch;
   std::unique_ptr<JobManager> jobs;  // null: options.job_workers == 0
   detail::TaskQueue requests;  // last: its threads call into everything above
@@ -62,6 +65,22 @@ inline constexpr const char* kShuttingDown =
 Status deadlineExceeded(const CallContext& ctx, const char* method);
 // The most of an error message a reply carries (a message quoting client input is cut).
 inline constexpr std::size_t kMaxErrorBytes = 1024;
+
+// Every request method answers with a status, never an exception: a transport's thread
+// must survive whatever goes wrong inside.
+template <class Body>
+Status guarded(Logger& log, const char* method, Body&& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    const std::string what = language::boundedText(e.what(), kMaxErrorBytes);
+    log.error("internal_error", {{"method", method}, {"message", what}});
+    return {StatusCode::Internal, std::string(method) + " failed inside the server: " + what};
+  } catch (...) {
+    log.error("internal_error", {{"method", method}, {"message", "unknown exception"}});
+    return {StatusCode::Internal, std::string(method) + " failed inside the server (unknown exception)"};
+  }
+}
 }  // namespace detail
 
 }  // namespace robodiff::server

@@ -15,11 +15,25 @@
 #include <vector>
 
 #include "robodiff/model/urdf_limits.hpp"
+#include "robodiff/server/artifact_source.hpp"
 #include "robodiff/server/job_manager.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::server {
+
+// A build host's side of a fleet (fleet.role = build).
+struct ArtifactServingOptions {
+  bool enabled = false;
+  std::filesystem::path signing_key;  // Ed25519 private key (robodiff keygen); required when enabled
+  bool build_for_robots = true;       // build what a robot asks for and this host lacks
+  std::uint32_t max_builds_per_caller = 4;     // robots' builds queued or running, per caller
+  std::uint32_t chunk_bytes = 256 * 1024;      // FetchArtifactChunk's most bytes per reply
+  std::size_t signed_entries_kept = 16;        // signed payloads kept in memory for chunk requests
+  // Sleeps this long before each chunk it serves: failover drills and tests (a build host
+  // that is killed mid-transfer). 0 in production.
+  std::chrono::milliseconds chunk_delay{0};
+};
 
 struct ServiceOptions {
   std::filesystem::path cache_dir;           // empty: cache::defaultCacheDir()
@@ -62,6 +76,12 @@ struct ServiceOptions {
   std::function<Status(const std::string& kind, const std::string& params_json,
                        const std::vector<std::filesystem::path>& readable_dirs)>
       validate_job;
+
+  // A fleet (docs/fleet.md). Robot host: the build hosts its libraries come from; this
+  // host compiles only when they cannot deliver (and `compile` is on).
+  std::shared_ptr<ArtifactSource> artifact_source;
+  // Build host: serves its libraries to robot hosts (QueryArtifact, FetchArtifactChunk).
+  ArtifactServingOptions artifact_serving;
 };
 
 // A snapshot of the service's figures for a metrics endpoint (server/http renders it in
@@ -94,6 +114,7 @@ struct ServiceMetrics {
   std::uint32_t queue_depth = 0, queue_capacity = 0;
   bool jobs_enabled = false;
   JobCounts jobs;
+  rpc::FleetFigures fleet;  // role "standalone": no fleet figures
 };
 
 // What the dashboard shows (server/http renders it as JSON for GET /api/overview): the
@@ -109,7 +130,7 @@ struct ServiceOverview {
     std::string id, model_id, model_name;
     std::string function;  // "rnea"
     std::string outputs;   // "value, jacobian[q,v,a]"
-    // tracing | queued | compiling | compiled | interpreted | build-failed | failed
+    // tracing | fetching | queued | compiling | compiled | interpreted | build-failed | failed
     std::string phase;
     std::string message;   // why it failed, or why the interpreter serves
     std::uint32_t references = 0;
@@ -165,6 +186,8 @@ class Service final : public ServiceApi {
   // Every method's fine latency histogram since start (its count: the method's requests);
   // cheap (atomics only), any thread. A sampler differences two of them (the dashboard's history).
   std::vector<ServiceOverview::MethodLatency> requestLatencies() const;
+  // This server's part in a fleet (FleetStatus's answer); cheap, any thread.
+  rpc::FleetFigures fleet() const;
 
   // ServiceApi
   const std::string& instanceId() const override;
@@ -180,6 +203,12 @@ class Service final : public ServiceApi {
   Status jobStatus(const CallContext& ctx, const rpc::JobStatusRequest& request, rpc::JobStatusReply& reply) override;
   Status cancelJob(const CallContext& ctx, const rpc::CancelJobRequest& request, rpc::CancelJobReply& reply) override;
   Status jobResult(const CallContext& ctx, const rpc::JobResultRequest& request, rpc::JobResultReply& reply) override;
+  Status queryArtifact(const CallContext& ctx, const rpc::QueryArtifactRequest& request,
+                       rpc::QueryArtifactReply& reply) override;
+  Status fetchArtifactChunk(const CallContext& ctx, const rpc::FetchArtifactChunkRequest& request,
+                            rpc::FetchArtifactChunkReply& reply) override;
+  Status fleetStatus(const CallContext& ctx, const rpc::FleetStatusRequest& request,
+                     rpc::FleetStatusReply& reply) override;
   Status shape(std::string_view function_id, FunctionShape& shape) override;
   Status evaluate(const CallContext& ctx, std::string_view function_id, std::span<const double> inputs,
                   std::span<double> outputs) override;
