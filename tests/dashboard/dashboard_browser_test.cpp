@@ -301,6 +301,9 @@ TEST(DashboardBrowser, LiveDashboardOfARealRobodiffd) {
     EXPECT_EQ(browser.executeScript("return document.querySelector(arguments[0]) !== null;", {selector}), true)
         << selector;
   EXPECT_EQ(browser.executeScript("return typeof window.robodiffDashboard.overview;"), "object");
+  // Not in a fleet: no Fleet panel (dashboard_fleet_browser_test.cpp shows it for the others).
+  EXPECT_EQ(browser.executeScript("return window.robodiffDashboard.overview.fleet.role;"), "standalone");
+  EXPECT_EQ(browser.executeScript("return getComputedStyle(document.getElementById('fleet')).display;"), "none");
   EXPECT_EQ(browser.executeScript("return window.__noReload;"), 1) << "the page reloaded";
   EXPECT_EQ(browser.executeScript("return window.robodiffDashboard.errors;"), json::array());
 

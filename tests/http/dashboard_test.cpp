@@ -118,6 +118,8 @@ TEST(Dashboard, NoLookupsMeansNoHitRateRatherThanZero) {
   EXPECT_TRUE(j["cache"]["hit_rate"].is_null());
   EXPECT_TRUE(j["models"].is_array() && j["models"].empty());
   EXPECT_TRUE(j["jobs"].is_array() && j["jobs"].empty());
+  EXPECT_EQ(j["fleet"]["role"], "standalone");  // no role set: not in a fleet (the page hides its panel)
+  EXPECT_TRUE(j["fleet"]["peers"].is_array() && j["fleet"]["peers"].empty());
 }
 
 TEST(Dashboard, ThePageHoldsItsElementsAndLoadsNothingFromElsewhere) {
@@ -126,6 +128,7 @@ TEST(Dashboard, ThePageHoldsItsElementsAndLoadsNothingFromElsewhere) {
   for (const char* id : {"id=\"models\"", "id=\"functions\"", "id=\"jobs\"", "id=\"build-queue\"",
                          "id=\"build-failures\"", "id=\"latency-chart\"", "id=\"rate-chart\"", "id=\"cache-hit-rate\"",
                          "id=\"cache-bytes\"", "id=\"refresh-status\"", "id=\"builds-failed\"", "id=\"specs-invalid\"",
+                         "id=\"fleet\" hidden", "id=\"fleet-role\"", "id=\"fleet-counts\"", "id=\"fleet-peers\"",
                          "/api/overview", "/api/history", "robodiffDashboard"})
     EXPECT_NE(page.find(id), std::string::npos) << id;
   // Every src/href is local (robot computers have no internet; nothing may be fetched).

@@ -1,11 +1,16 @@
 // A real Service's metrics(): requests recorded by method and status land in the counters
 // and in cumulative latency buckets that agree with them, and the page renders validly;
-// invalid specs and failed library builds are two counters, each counting only its own.
+// invalid specs and failed library builds are two counters, each counting only its own;
+// the fleet's figures: a standalone server shows its role and no fleet counters, a robot
+// host its counts and per build host (labels escaped), a build host what it served.
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <cstdio>
+#include <map>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -118,6 +123,134 @@ TEST(ServiceMetrics, InvalidSpecsAreCountedApartFromFailedBuilds) {
   const nlohmann::json overview = nlohmann::json::parse(server::overviewJson(service->overview()));
   EXPECT_EQ(overview["specs_invalid"], 2);
   EXPECT_EQ(overview["builds"]["failed"], 1);
+}
+
+// Every fleet family this page may carry besides robodiff_fleet_role.
+const std::vector<std::string> kFleetRobotFamilies = {
+    "robodiff_fleet_artifacts_fetched_total",      "robodiff_fleet_bytes_fetched_total",
+    "robodiff_fleet_artifacts_refused_total",      "robodiff_fleet_fetch_failures_total",
+    "robodiff_fleet_peer_artifacts_fetched_total", "robodiff_fleet_peer_bytes_fetched_total",
+    "robodiff_fleet_peer_refusals_total",          "robodiff_fleet_peer_failures_total",
+    "robodiff_fleet_peer_reachable"};
+const std::vector<std::string> kFleetBuildFamilies = {"robodiff_fleet_artifacts_served_total",
+                                                      "robodiff_fleet_bytes_served_total",
+                                                      "robodiff_fleet_builds_for_robots_total"};
+
+TEST(ServiceMetrics, AStandaloneServerShowsItsRoleAndNoFleetCounters) {
+  ServingService service;
+  const server::ServiceMetrics m = service->metrics();
+  EXPECT_EQ(m.fleet.role, "standalone");
+  const PromText p = parsePrometheusText(server::serviceMetricsText(m));
+  ASSERT_TRUE(p.errors.empty()) << p.errorText();
+  ASSERT_NE(p.family("robodiff_fleet_role"), nullptr);
+  EXPECT_EQ(p.family("robodiff_fleet_role")->type, "gauge");
+  ASSERT_EQ(p.family("robodiff_fleet_role")->samples.size(), 1u);  // info-style: the role only
+  EXPECT_EQ(p.value("robodiff_fleet_role", {{"role", "standalone"}}), 1.0);
+  for (const auto& names : {kFleetRobotFamilies, kFleetBuildFamilies})
+    for (const std::string& name : names) EXPECT_EQ(p.family(name), nullptr) << name;
+
+  const nlohmann::json fleet = nlohmann::json::parse(server::overviewJson(service->overview()))["fleet"];
+  EXPECT_EQ(fleet["role"], "standalone");
+  EXPECT_EQ(fleet["artifacts_fetched"], 0);
+  EXPECT_TRUE(fleet["peers"].is_array() && fleet["peers"].empty()) << fleet;
+}
+
+// A robot host with two build hosts: one reachable, one whose service name needs escaping.
+server::ServiceMetrics fleetRobotMetrics() {
+  server::ServiceMetrics m;
+  rpc::FleetFigures& f = m.fleet;
+  f.role = "robot";
+  f.target = "x86-64-v3";
+  f.artifacts_fetched = 5;
+  f.bytes_fetched = 123456789;
+  f.artifacts_refused = 1;
+  f.fetch_failures = 2;
+  f.peers.push_back({"robodiff_build_a", "builder-a:42:x", true, 4, 100000000, 0, 1, "lost after 0 of 9 bytes"});
+  f.peers.push_back({"odd \"host\"\\b\nz", "", false, 1, 23456789, 1, 7, "refused: signature does not verify"});
+  return m;
+}
+
+TEST(ServiceMetrics, ARobotHostShowsItsFleetCountsPerBuildHost) {
+  const std::string text = server::serviceMetricsText(fleetRobotMetrics());
+  const PromText p = parsePrometheusText(text);
+  ASSERT_TRUE(p.errors.empty()) << p.errorText() << text;
+  EXPECT_EQ(p.value("robodiff_fleet_role", {{"role", "robot"}}), 1.0);
+  EXPECT_EQ(p.family("robodiff_fleet_role")->samples.size(), 1u);
+  EXPECT_EQ(p.value("robodiff_fleet_artifacts_fetched_total"), 5.0);
+  EXPECT_EQ(p.value("robodiff_fleet_bytes_fetched_total"), 123456789.0);
+  EXPECT_EQ(p.value("robodiff_fleet_artifacts_refused_total"), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_fetch_failures_total"), 2.0);
+  for (const std::string& name : kFleetRobotFamilies) {
+    ASSERT_NE(p.family(name), nullptr) << name;
+    EXPECT_EQ(p.family(name)->type, name.ends_with("_total") ? "counter" : "gauge") << name;
+    EXPECT_FALSE(p.family(name)->help.empty()) << name;
+  }
+  for (const std::string& name : kFleetBuildFamilies) EXPECT_EQ(p.family(name), nullptr) << name;
+
+  const std::map<std::string, std::string> a = {{"build_host", "robodiff_build_a"}};
+  const std::map<std::string, std::string> b = {{"build_host", "odd \"host\"\\b\nz"}};  // as parsed back
+  EXPECT_EQ(p.value("robodiff_fleet_peer_artifacts_fetched_total", a), 4.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_bytes_fetched_total", a), 100000000.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_refusals_total", a), 0.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_failures_total", a), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_reachable", a), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_artifacts_fetched_total", b), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_bytes_fetched_total", b), 23456789.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_refusals_total", b), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_failures_total", b), 7.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_reachable", b), 0.0);
+  EXPECT_EQ(p.family("robodiff_fleet_peer_reachable")->samples.size(), 2u);
+  // On the page itself: the quote, backslash and newline escaped as the format says.
+  EXPECT_NE(text.find("robodiff_fleet_peer_reachable{build_host=\"odd \\\"host\\\"\\\\b\\nz\"} 0\n"),
+            std::string::npos)
+      << text;
+}
+
+TEST(ServiceMetrics, ABuildHostShowsWhatItServed) {
+  server::ServiceMetrics m;
+  m.fleet.role = "build";
+  m.fleet.artifacts_served = 3;
+  m.fleet.bytes_served = 7340032;
+  m.fleet.builds_for_robots = 2;
+  const PromText p = parsePrometheusText(server::serviceMetricsText(m));
+  ASSERT_TRUE(p.errors.empty()) << p.errorText();
+  EXPECT_EQ(p.value("robodiff_fleet_role", {{"role", "build"}}), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_artifacts_served_total"), 3.0);
+  EXPECT_EQ(p.value("robodiff_fleet_bytes_served_total"), 7340032.0);
+  EXPECT_EQ(p.value("robodiff_fleet_builds_for_robots_total"), 2.0);
+  for (const std::string& name : kFleetBuildFamilies) EXPECT_EQ(p.family(name)->type, "counter") << name;
+  for (const std::string& name : kFleetRobotFamilies) EXPECT_EQ(p.family(name), nullptr) << name;
+}
+
+TEST(ServiceMetrics, TheOverviewCarriesTheFleetAndItsBuildHosts) {
+  server::ServiceOverview o;
+  o.metrics = fleetRobotMetrics();
+  const nlohmann::json f = nlohmann::json::parse(server::overviewJson(o))["fleet"];
+  EXPECT_EQ(f["role"], "robot");
+  EXPECT_EQ(f["target"], "x86-64-v3");
+  EXPECT_EQ(f["artifacts_fetched"], 5);
+  EXPECT_EQ(f["bytes_fetched"], 123456789);
+  EXPECT_EQ(f["artifacts_refused"], 1);
+  EXPECT_EQ(f["fetch_failures"], 2);
+  EXPECT_EQ(f["artifacts_served"], 0);
+  EXPECT_EQ(f["bytes_served"], 0);
+  EXPECT_EQ(f["builds_for_robots"], 0);
+  ASSERT_EQ(f["peers"].size(), 2u);
+  const nlohmann::json& a = f["peers"][0];
+  EXPECT_EQ(a["service"], "robodiff_build_a");
+  EXPECT_EQ(a["instance_id"], "builder-a:42:x");
+  EXPECT_EQ(a["reachable"], true);
+  EXPECT_EQ(a["artifacts_fetched"], 4);
+  EXPECT_EQ(a["bytes_fetched"], 100000000);
+  EXPECT_EQ(a["refusals"], 0);
+  EXPECT_EQ(a["failures"], 1);
+  EXPECT_EQ(a["last_problem"], "lost after 0 of 9 bytes");
+  const nlohmann::json& b = f["peers"][1];
+  EXPECT_EQ(b["service"], "odd \"host\"\\b\nz");
+  EXPECT_EQ(b["instance_id"], "");
+  EXPECT_EQ(b["reachable"], false);
+  EXPECT_EQ(b["failures"], 7);
+  EXPECT_EQ(b["last_problem"], "refused: signature does not verify");
 }
 
 }  // namespace

@@ -54,6 +54,31 @@ json jobJson(const rpc::JobInfo& j) {
           {"error", j.error}};
 }
 
+// This server's part in a fleet: every FleetFigures field, the peers (a robot's build
+// hosts) as objects. A ServiceMetrics made without a role is standalone.
+json fleetJson(const rpc::FleetFigures& f) {
+  json peers = json::array();
+  for (const rpc::FleetPeer& p : f.peers)
+    peers.push_back({{"service", p.service},
+                     {"instance_id", p.instance_id},
+                     {"reachable", p.reachable},
+                     {"artifacts_fetched", p.artifacts_fetched},
+                     {"bytes_fetched", p.bytes_fetched},
+                     {"refusals", p.refusals},
+                     {"failures", p.failures},
+                     {"last_problem", p.last_problem}});
+  return {{"role", f.role.empty() ? "standalone" : f.role},
+          {"target", f.target},
+          {"artifacts_fetched", f.artifacts_fetched},
+          {"bytes_fetched", f.bytes_fetched},
+          {"artifacts_refused", f.artifacts_refused},
+          {"fetch_failures", f.fetch_failures},
+          {"artifacts_served", f.artifacts_served},
+          {"bytes_served", f.bytes_served},
+          {"builds_for_robots", f.builds_for_robots},
+          {"peers", std::move(peers)}};
+}
+
 }  // namespace
 
 std::string overviewJson(const ServiceOverview& o) {
@@ -105,6 +130,7 @@ std::string overviewJson(const ServiceOverview& o) {
   out["jobs"] = json::array();
   for (const auto& j : o.jobs) out["jobs"].push_back(jobJson(j));
   out["jobs_error"] = o.jobs_error;
+  out["fleet"] = fleetJson(m.fleet);
 
   // Per method: figures since start, and the fine histogram since start (a reader that
   // differences two polls gets the latency in between; the page's charts come from

@@ -19,6 +19,60 @@ const char* lowerState(rpc::ServingState s) {
   return "unknown";
 }
 
+// A robot's counters: its own totals, then per build host (label build_host = its service).
+void robotFleetFamilies(MetricsText& t, const rpc::FleetFigures& f) {
+  t.family("robodiff_fleet_artifacts_fetched_total", MetricType::Counter,
+           "Libraries fetched from the build hosts, verified and filed in the cache.");
+  t.sample("robodiff_fleet_artifacts_fetched_total", {}, d(f.artifacts_fetched));
+  t.family("robodiff_fleet_bytes_fetched_total", MetricType::Counter, "Bytes of the libraries fetched and filed.");
+  t.sample("robodiff_fleet_bytes_fetched_total", {}, d(f.bytes_fetched));
+  t.family("robodiff_fleet_artifacts_refused_total", MetricType::Counter,
+           "Libraries fetched that failed verification (signature, digest, key) and were thrown away.");
+  t.sample("robodiff_fleet_artifacts_refused_total", {}, d(f.artifacts_refused));
+  t.family("robodiff_fleet_fetch_failures_total", MetricType::Counter,
+           "Libraries no build host could deliver: this host compiled them (or the interpreter serves).");
+  t.sample("robodiff_fleet_fetch_failures_total", {}, d(f.fetch_failures));
+
+  const auto per_peer = [&](const char* name, const char* help, MetricType type, auto value) {
+    t.family(name, type, help);
+    for (const rpc::FleetPeer& p : f.peers) t.sample(name, {{"build_host", p.service}}, value(p));
+  };
+  per_peer("robodiff_fleet_peer_artifacts_fetched_total", "Libraries fetched from a build host and filed.",
+           MetricType::Counter, [](const rpc::FleetPeer& p) { return d(p.artifacts_fetched); });
+  per_peer("robodiff_fleet_peer_bytes_fetched_total", "Bytes of the libraries fetched from a build host.",
+           MetricType::Counter, [](const rpc::FleetPeer& p) { return d(p.bytes_fetched); });
+  per_peer("robodiff_fleet_peer_refusals_total",
+           "Libraries from a build host that failed verification (thrown away).", MetricType::Counter,
+           [](const rpc::FleetPeer& p) { return d(p.refusals); });
+  per_peer("robodiff_fleet_peer_failures_total",
+           "Fetches from a build host that went wrong otherwise: no answer, its build failed, the transfer broke off.",
+           MetricType::Counter, [](const rpc::FleetPeer& p) { return d(p.failures); });
+  per_peer("robodiff_fleet_peer_reachable", "1 when a build host's last call got an answer, else 0.",
+           MetricType::Gauge, [](const rpc::FleetPeer& p) { return p.reachable ? 1.0 : 0.0; });
+}
+
+void buildHostFleetFamilies(MetricsText& t, const rpc::FleetFigures& f) {
+  t.family("robodiff_fleet_artifacts_served_total", MetricType::Counter,
+           "Libraries served whole to robot hosts (the last chunk of a signed payload sent).");
+  t.sample("robodiff_fleet_artifacts_served_total", {}, d(f.artifacts_served));
+  t.family("robodiff_fleet_bytes_served_total", MetricType::Counter, "Chunk bytes served to robot hosts.");
+  t.sample("robodiff_fleet_bytes_served_total", {}, d(f.bytes_served));
+  t.family("robodiff_fleet_builds_for_robots_total", MetricType::Counter,
+           "Library builds started because a robot host asked for a library this host lacked.");
+  t.sample("robodiff_fleet_builds_for_robots_total", {}, d(f.builds_for_robots));
+}
+
+// This server's part in a fleet (docs/fleet.md): its role, and the counters of that role
+// only (a standalone server has none).
+void fleetFamilies(MetricsText& t, const rpc::FleetFigures& f) {
+  const std::string role = f.role.empty() ? "standalone" : f.role;
+  t.family("robodiff_fleet_role", MetricType::Gauge,
+           "This server's part in a fleet: 1 for its role (standalone, build host or robot host).");
+  t.sample("robodiff_fleet_role", {{"role", role}}, 1);
+  if (role == "robot") robotFleetFamilies(t, f);
+  if (role == "build") buildHostFleetFamilies(t, f);
+}
+
 }  // namespace
 
 std::string serviceMetricsText(const ServiceMetrics& m) {
@@ -106,6 +160,7 @@ std::string serviceMetricsText(const ServiceMetrics& m) {
     t.sample("robodiff_jobs", {{"state", "failed"}}, m.jobs.failed);
     t.sample("robodiff_jobs", {{"state", "cancelled"}}, m.jobs.cancelled);
   }
+  fleetFamilies(t, m.fleet);
   return t.text();
 }
 

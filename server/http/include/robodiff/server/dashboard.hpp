@@ -2,7 +2,8 @@
 // The operators' dashboard: one page (GET / and /dashboard; HTML, CSS and script in one
 // file, server/http/dashboard/dashboard.html, compiled in) that polls GET /api/overview
 // every second and redraws: models, functions with their compile state and latency, the
-// build queue, failed builds and invalid specs, the cache, the workers, jobs with progress
+// build queue, failed builds and invalid specs, the cache, the workers, the fleet (a build
+// or robot host's counts and build hosts; hidden when standalone), jobs with progress
 // bars, and latency and request-rate charts drawn from GET /api/history (the server's
 // recent history, dashboard_history.hpp: the charts are full from the moment it opens).
 
