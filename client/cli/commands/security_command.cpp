@@ -17,6 +17,7 @@ struct SecurityArgs {
   bool operator_role = false;
   bool protect_metadata = false;
   int days = 3650;
+  std::vector<std::string> also_calls;
 };
 
 client::KeystoreOptions keystoreOptions(const SecurityArgs& args) {
@@ -24,6 +25,7 @@ client::KeystoreOptions keystoreOptions(const SecurityArgs& args) {
   options.service_name = args.service;
   options.valid_days = args.days;
   options.protect_metadata = args.protect_metadata;
+  options.also_calls = args.also_calls;
   return options;
 }
 
@@ -86,6 +88,9 @@ void addSecurityCommand(CLI::App& app) {
   CLI::App* add_server = cmd->add_subcommand("add-server", "Add another server identity (a second robodiffd)");
   add_server->add_option("dir", server_args->dir, "Keystore directory")->required();
   add_server->add_option("name", server_args->name, "Identity name (letters, digits, - _ .)")->required();
+  add_server->add_option("--also-calls", server_args->also_calls,
+                         "A service this server also calls as a client (a fleet's robot host: its build hosts' "
+                         "service; repeatable). One identity for both: Cyclone DDS allows one per process");
   addCommonOptions(add_server, server_args);
   add_server->callback([server_args] {
     client::addIdentity(server_args->dir, server_args->name, client::IdentityRole::Server,

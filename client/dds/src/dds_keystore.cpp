@@ -166,8 +166,15 @@ std::string permissionsXml(std::string_view name, IdentityRole role, const Keyst
       role == IdentityRole::Server ? dds_codec::serverRequestPartitions()
                                    : std::vector{dds_codec::callerPartition(name, role == IdentityRole::Operator)};
   const bool server = role == IdentityRole::Server;
-  const std::string rules = topicRule("publish", server ? reply : request, partitions) + "\n        " +
-                            topicRule("subscribe", server ? request : reply, partitions);
+  std::string rules;
+  if (server)  // first: permittedCallerPartition takes the first caller partition granted
+    for (const std::string& service : options.also_calls) {
+      const std::vector<std::string> own{dds_codec::callerPartition(name, false)};
+      rules += topicRule("publish", service + "_request", own) + "\n        " +
+               topicRule("subscribe", service + "_reply", own) + "\n        ";
+    }
+  rules += topicRule("publish", server ? reply : request, partitions) + "\n        " +
+           topicRule("subscribe", server ? request : reply, partitions);
   std::ostringstream xml;
   xml << R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"

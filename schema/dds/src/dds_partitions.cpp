@@ -39,18 +39,19 @@ std::string permittedCallerPartition(const std::filesystem::path& permissions) {
   const std::string document = text.str();
   for (std::string_view prefix : {kOperatorPartitionPrefix, kCallerPartitionPrefix}) {
     const std::string open = "<partition>" + std::string(prefix);
-    const auto at = document.find(open);
-    if (at == std::string::npos) continue;
-    const auto begin = at + std::string_view("<partition>").size();
-    const auto end = document.find('<', begin);
-    if (end == std::string::npos) break;
-    const std::string partition = document.substr(begin, end - begin);
-    if (partition.find_first_of("*?[") != std::string::npos) break;  // a pattern: a server's grant
-    return partition;
+    for (auto at = document.find(open); at != std::string::npos; at = document.find(open, at + 1)) {
+      const auto begin = at + std::string_view("<partition>").size();
+      const auto end = document.find('<', begin);
+      if (end == std::string::npos) break;
+      const std::string partition = document.substr(begin, end - begin);
+      if (partition.find_first_of("*?[") != std::string::npos) continue;  // a pattern: a server's grant
+      return partition;
+    }
   }
   throw std::invalid_argument("DDS security: the permissions " + permissions.string() +
-                              " grant no robodiff caller partition (robodiff.caller.<name>): the identity was made "
-                              "by an older `robodiff security`; add it again with `robodiff security add-client`");
+                              " grant no robodiff caller partition (robodiff.caller.<name>): it is a server identity "
+                              "(which calls other services only when made with `robodiff security add-server "
+                              "--also-calls SERVICE`), or was made by an older `robodiff security`");
 }
 
 std::string openCallerPartition() {

@@ -22,13 +22,16 @@ void setUpBuildHost(const ServerConfig& config, ServiceOptions& options) {
   s.chunk_delay = f.chunk_delay;
 }
 
+// The robot calls its build hosts with its server identity (dds.security_identity) unless
+// fleet.security_identity names another: Cyclone DDS 0.10 holds one permissions document
+// per domain in a process, so both participants need the one that grants both
+// (`robodiff security add-server NAME --also-calls BUILD_SERVICE`).
 dds_codec::DdsSecurity robotSecurity(const ServerConfig& config) {
   if (config.dds.security.empty()) return {};
-  if (config.fleet.security_identity.empty())
-    throw ConfigError("fleet.security_identity: with dds.security set, name this robot's client identity in that "
-                      "keystore (robodiff security add NAME); it calls the build hosts with it");
+  const std::string& name =
+      config.fleet.security_identity.empty() ? config.dds.security_identity : config.fleet.security_identity;
   try {
-    return dds_codec::keystoreIdentity(config.dds.security, config.fleet.security_identity);
+    return dds_codec::keystoreIdentity(config.dds.security, name);
   } catch (const std::invalid_argument& e) {
     throw ConfigError(std::string("fleet.security_identity: ") + e.what());
   }

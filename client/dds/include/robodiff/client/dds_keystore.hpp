@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace robodiff::client {
 
@@ -27,6 +28,11 @@ struct KeystoreOptions {
   // that no one on the path can forge them; the data is encrypted either way. Costs about
   // 2x the round-trip latency of open DDS instead of about 1.3x (deploy/security.md).
   bool protect_metadata = false;
+  // A server identity that also calls these services as a client, in its own caller
+  // partition: a fleet's robot host calling its build hosts (docs/fleet.md). One identity
+  // for both, because Cyclone DDS 0.10's access control keeps one permissions document per
+  // domain in a process (its participants cannot hold different ones).
+  std::vector<std::string> also_calls;
 };
 
 // Creates the CA, the signed governance (all topics' data encrypted, discovery and
