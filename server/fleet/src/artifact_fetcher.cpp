@@ -134,61 +134,70 @@ std::string ArtifactFetcher::obtain(fleet::BuildHostLink& host, Attempt& attempt
   }
 }
 
+// What is wrong with a signed manifest for this fetch, or empty: another function (a swapped
+// library), another target than asked, or one this CPU cannot run.
+std::string ArtifactFetcher::offerProblem(const cache::EntryInfo& info, const Attempt& attempt) {
+  if (info.portable_key != attempt.request.portable_key)
+    return "the signed manifest is for portable key " + info.portable_key + ", not the one asked (" +
+           attempt.request.portable_key + ")";
+  const std::string label = " target=" + (attempt.target.empty() ? std::string("generic") : attempt.target);
+  if (info.compiler.size() < label.size() ||
+      info.compiler.compare(info.compiler.size() - label.size(), label.size(), label) != 0)
+    return "the library was built for another target than " + attempt.target + " (" + info.compiler + ")";
+  return cache::targetProblem(info.compiler);
+}
+
+bool ArtifactFetcher::pull(fleet::BuildHostLink& host, Attempt& attempt, cache::EntryReceiver& receiver,
+                           const std::string& key) {
+  rpc::FetchArtifactChunkRequest request;
+  request.key = key;
+  request.include_sources = attempt.request.include_sources;
+  request.max_bytes = options_.chunk_bytes;
+  while (!receiver.complete()) {
+    if (attempt.stop()) return false;
+    request.offset = receiver.received();
+    rpc::FetchArtifactChunkReply chunk;
+    const Status status = host.chunk(request, chunk);
+    if (!status.ok()) {
+      const std::string problem = "lost after " + std::to_string(request.offset) + " of " +
+                                  std::to_string(receiver.payloadBytes()) + " bytes: " + status.message;
+      host.failed(problem);
+      attempt.problems.push_back(host.service() + ": " + problem);
+      log_.warn("fleet_transfer_lost",
+                {{"function_id", attempt.function_id}, {"build_host", host.service()}, {"message", problem}});
+      return false;
+    }
+    if (chunk.offset != request.offset || chunk.payload_bytes != receiver.payloadBytes() || chunk.data.empty())
+      throw cache::TransferRefused("chunk at offset " + std::to_string(request.offset) +
+                                   " disagrees with the manifest (offset " + std::to_string(chunk.offset) +
+                                   ", payload " + std::to_string(chunk.payload_bytes) + " bytes, " +
+                                   std::to_string(chunk.data.size()) + " data bytes)");
+    receiver.append(chunk.data.data(), chunk.data.size());
+  }
+  return true;
+}
+
 std::string ArtifactFetcher::transfer(fleet::BuildHostLink& host, Attempt& attempt,
                                       const rpc::QueryArtifactReply& offer) {
   const Clock::time_point started = Clock::now();
-  auto refuse = [&](const std::string& problem) {
+  auto fail = [&](const std::string& problem, bool refusal) {
+    (refusal ? host.refused(problem) : host.failed(problem));
+    attempt.problems.push_back(host.service() + ": " + (refusal ? "refused: " : "") + problem);
+    if (!refusal) return std::string();
     refused_.fetch_add(1, std::memory_order_relaxed);
-    host.refused(problem);
-    attempt.problems.push_back(host.service() + ": refused: " + problem);
-    log_.warn("fleet_artifact_refused",
-              {{"function_id", attempt.function_id}, {"build_host", host.service()}, {"key", offer.key},
-               {"problem", problem}});
+    log_.warn("fleet_artifact_refused", {{"function_id", attempt.function_id}, {"build_host", host.service()},
+                                         {"key", offer.key}, {"problem", problem}});
     return std::string();
   };
   try {
     cache::TransferLimits limits;
     limits.max_payload_bytes = options_.max_artifact_bytes;
     cache::EntryReceiver receiver(offer.manifest_json, offer.signature_hex, trusted_, offer.key, limits);
-    const cache::EntryInfo& info = receiver.manifest().info;
-    if (info.portable_key != attempt.request.portable_key)
-      return refuse("the signed manifest is for portable key " + info.portable_key + ", not the one asked (" +
-                    attempt.request.portable_key + ")");
-    const std::string label = " target=" + (attempt.target.empty() ? std::string("generic") : attempt.target);
-    if (info.compiler.size() < label.size() || info.compiler.compare(info.compiler.size() - label.size(), label.size(), label) != 0)
-      return refuse("the library was built for another target than " + attempt.target + " (" + info.compiler + ")");
-    if (const std::string problem = cache::targetProblem(info.compiler); !problem.empty()) return refuse(problem);
-
-    rpc::FetchArtifactChunkRequest request;
-    request.key = offer.key;
-    request.include_sources = attempt.request.include_sources;
-    request.max_bytes = options_.chunk_bytes;
-    while (!receiver.complete()) {
-      if (attempt.stop()) return {};
-      request.offset = receiver.received();
-      rpc::FetchArtifactChunkReply chunk;
-      const Status status = host.chunk(request, chunk);
-      if (!status.ok()) {
-        const std::string problem = "lost after " + std::to_string(request.offset) + " of " +
-                                    std::to_string(receiver.payloadBytes()) + " bytes: " + status.message;
-        host.failed(problem);
-        attempt.problems.push_back(host.service() + ": " + problem);
-        log_.warn("fleet_transfer_lost", {{"function_id", attempt.function_id}, {"build_host", host.service()},
-                                          {"message", problem}});
-        return {};
-      }
-      if (chunk.offset != request.offset || chunk.payload_bytes != receiver.payloadBytes() || chunk.data.empty())
-        return refuse("chunk at offset " + std::to_string(request.offset) + " disagrees with the manifest (offset " +
-                      std::to_string(chunk.offset) + ", payload " + std::to_string(chunk.payload_bytes) + " bytes, " +
-                      std::to_string(chunk.data.size()) + " data bytes)");
-      receiver.append(chunk.data.data(), chunk.data.size());
-    }
+    if (const std::string problem = offerProblem(receiver.manifest().info, attempt); !problem.empty())
+      return fail(problem, true);
+    if (!pull(host, attempt, receiver, offer.key)) return {};  // lost (recorded) or cancelled
     const cache::ImportResult result = receiver.install(*attempt.cache);
-    if (result.status == cache::ImportResult::Status::Refused) {
-      host.failed(result.problem);
-      attempt.problems.push_back(host.service() + ": " + result.problem);
-      return {};
-    }
+    if (result.status == cache::ImportResult::Status::Refused) return fail(result.problem, false);
     const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
     fetched_.fetch_add(1, std::memory_order_relaxed);
     bytes_.fetch_add(receiver.payloadBytes(), std::memory_order_relaxed);
@@ -198,11 +207,9 @@ std::string ArtifactFetcher::transfer(fleet::BuildHostLink& host, Attempt& attem
                {"bytes", receiver.payloadBytes()}, {"seconds", seconds}, {"signer", result.signer}});
     return offer.key;
   } catch (const cache::TransferRefused& e) {
-    return refuse(e.what());
+    return fail(e.what(), true);
   } catch (const std::exception& e) {  // this host's disk (the scratch directory, the cache)
-    host.failed(e.what());
-    attempt.problems.push_back(host.service() + ": " + e.what());
-    return {};
+    return fail(e.what(), false);
   }
 }
 

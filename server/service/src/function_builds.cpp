@@ -170,31 +170,8 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   const auto started = Clock::now();
   std::shared_ptr<const Evaluator> evaluator;
   std::size_t instructions = 0, nodes = 0;
-  Status failure;
   FailureStage stage = FailureStage::Trace;
-  try {
-    // The builder's defaults, as the build workers use them: same graph, same layout.
-    const BuiltFunction built = buildFunction(model, f.spec(), LibraryOptions{}.builder);
-    codegen::Interpreter interpreter(*built.graph, built.definition);
-    instructions = interpreter.instructionCount();
-    nodes = built.graph->size();
-    FunctionLayout layout = FunctionLayout::fromDefinition(built.definition, f.spec());
-    evaluator = std::make_shared<const InterpretedEvaluator>(std::move(layout), std::move(interpreter));
-  } catch (const SpecTooLarge& e) {
-    failure = {StatusCode::ResourceExhausted, e.what()};
-    stage = FailureStage::InvalidSpec;
-  } catch (const SpecError& e) {
-    failure = {StatusCode::InvalidArgument, e.what()};
-    stage = FailureStage::InvalidSpec;
-  } catch (const symbolic::GraphTooLarge& e) {
-    failure = {StatusCode::ResourceExhausted, std::string("the function is too large to build: ") + e.what() +
-                                                  "; ask for fewer outputs or derivatives, or use a smaller robot"};
-    stage = FailureStage::InvalidSpec;
-  } catch (const std::bad_alloc&) {
-    failure = {StatusCode::ResourceExhausted, "out of memory while tracing function " + f.id()};
-  } catch (const std::exception& e) {
-    failure = {StatusCode::Internal, std::string("tracing failed: ") + e.what()};
-  }
+  Status failure = interpret(f, evaluator, instructions, nodes, stage);
   if (!failure.ok()) {
     failFunction(function, std::move(failure), stage);
     return;
@@ -228,6 +205,34 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   }
   if (!compile_queue_.post([this, function] { compile(function); }))
     builds_queued_.fetch_sub(1, std::memory_order_relaxed);
+}
+
+Status FunctionBuilds::interpret(const FunctionEntry& f, std::shared_ptr<const Evaluator>& evaluator,
+                                 std::size_t& instructions, std::size_t& nodes, FailureStage& stage) {
+  try {
+    // The builder's defaults, as the build workers use them: same graph, same layout.
+    const BuiltFunction built = buildFunction(*f.model().model, f.spec(), LibraryOptions{}.builder);
+    codegen::Interpreter interpreter(*built.graph, built.definition);
+    instructions = interpreter.instructionCount();
+    nodes = built.graph->size();
+    FunctionLayout layout = FunctionLayout::fromDefinition(built.definition, f.spec());
+    evaluator = std::make_shared<const InterpretedEvaluator>(std::move(layout), std::move(interpreter));
+    return {};
+  } catch (const SpecTooLarge& e) {
+    stage = FailureStage::InvalidSpec;
+    return {StatusCode::ResourceExhausted, e.what()};
+  } catch (const SpecError& e) {
+    stage = FailureStage::InvalidSpec;
+    return {StatusCode::InvalidArgument, e.what()};
+  } catch (const symbolic::GraphTooLarge& e) {
+    stage = FailureStage::InvalidSpec;
+    return {StatusCode::ResourceExhausted, std::string("the function is too large to build: ") + e.what() +
+                                               "; ask for fewer outputs or derivatives, or use a smaller robot"};
+  } catch (const std::bad_alloc&) {
+    return {StatusCode::ResourceExhausted, "out of memory while tracing function " + f.id()};
+  } catch (const std::exception& e) {
+    return {StatusCode::Internal, std::string("tracing failed: ") + e.what()};
+  }
 }
 
 void FunctionBuilds::fetch(const std::shared_ptr<FunctionEntry>& function, bool may_compile) {

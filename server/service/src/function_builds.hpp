@@ -112,6 +112,9 @@ class FunctionBuilds {
   bool loadPortable(const std::shared_ptr<FunctionEntry>& function);
   bool loadArtifact(const std::shared_ptr<FunctionEntry>& function, const char* source,
                     const std::function<std::optional<cache::Artifact>()>& lookUp);
+  // The interpreter for `f` (OK), or why it cannot be traced (`stage` says where).
+  static Status interpret(const FunctionEntry& f, std::shared_ptr<const Evaluator>& evaluator,
+                          std::size_t& instructions, std::size_t& nodes, FailureStage& stage);
   void compile(const std::shared_ptr<FunctionEntry>& function);
   void fetch(const std::shared_ptr<FunctionEntry>& function, bool may_compile);
   void refill(const std::shared_ptr<FunctionEntry>& function, const std::string& key);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "robodiff/cache/artifact_signing.hpp"
+#include "robodiff/cache/entry_transfer.hpp"
 #include "robodiff/server/artifact_source.hpp"
 #include "robodiff/server/fleet_options.hpp"
 #include "robodiff/server/log.hpp"
@@ -48,6 +49,10 @@ class ArtifactFetcher final : public ArtifactSource {
   // build when `ask_build`. Empty key: not delivered (attempt.problem says why).
   std::string obtain(fleet::BuildHostLink& host, Attempt& attempt, bool ask_build);
   std::string transfer(fleet::BuildHostLink& host, Attempt& attempt, const rpc::QueryArtifactReply& offer);
+  static std::string offerProblem(const cache::EntryInfo& info, const Attempt& attempt);
+  // The payload into `receiver`, chunk by chunk; false when the host was lost (recorded)
+  // or the fetch cancelled. Throws cache::TransferRefused for a chunk that disagrees.
+  bool pull(fleet::BuildHostLink& host, Attempt& attempt, cache::EntryReceiver& receiver, const std::string& key);
 
   FleetFetchOptions options_;
   Logger& log_;
