@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace bench {
 
@@ -29,16 +30,22 @@ inline std::string readText(const std::filesystem::path& p) {
 struct Daemon {
   pid_t pid = -1;
   std::filesystem::path log;
+  // `extra`: more robodiffd arguments after --cache and --dds-domain (e.g. --set k=v).
   Daemon(const std::filesystem::path& exe, const std::filesystem::path& cache, int domain,
-         const std::filesystem::path& log_path) : log(log_path) {
+         const std::filesystem::path& log_path, const std::vector<std::string>& extra = {})
+      : log(log_path) {
+    // The arguments are made before fork: the child of a threaded process must not allocate.
+    std::vector<std::string> args = {exe.string(), "--cache", cache.string(), "--dds-domain", std::to_string(domain)};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
     pid = fork();
     if (pid == 0) {
       const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
       dup2(fd, STDERR_FILENO);
       dup2(fd, STDOUT_FILENO);
-      const std::string d = std::to_string(domain);
-      execl(exe.c_str(), exe.c_str(), "--cache", cache.c_str(), "--dds-domain", d.c_str(),
-            static_cast<char*>(nullptr));
+      execv(argv[0], argv.data());
       _exit(127);
     }
     for (int i = 0; i < 3000; ++i) {
