@@ -167,38 +167,41 @@ void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
   if (loadPortable(function)) return;
   if (settings_.compile && key_problem.empty()) cache_misses_.fetch_add(1, std::memory_order_relaxed);
 
+  // A robot host asks its build hosts at once, while it traces: a library that arrives
+  // first serves before the interpreter would.
+  const bool build = settings_.compile && key_problem.empty();
+  const bool fetching = settings_.source != nullptr;
+  if (fetching) {
+    f.setCompileStage(CompileStage::Fetching);
+    fetch_queue_.post([this, function, build] { fetch(function, build); });
+  }
   const auto started = Clock::now();
   std::shared_ptr<const Evaluator> evaluator;
   std::size_t instructions = 0, nodes = 0;
   FailureStage stage = FailureStage::Trace;
   Status failure = interpret(f, evaluator, instructions, nodes, stage);
+  if (!failure.ok() && f.state() == rpc::FunctionState::Ready) {  // the fetched library serves it
+    log_.warn("trace_failed", {{"function_id", f.id()}, {"message", failure.message}, {"serves", "the library"}});
+    return;
+  }
   if (!failure.ok()) {
     failFunction(function, std::move(failure), stage);
     return;
   }
-  // Counted as queued (or fetching) before it is READY: whoever sees it READY sees its
-  // library coming.
-  const bool build = settings_.compile && key_problem.empty();
-  const bool fetching = settings_.source != nullptr;
-  if (fetching) {
-    f.setCompileStage(CompileStage::Fetching);
-  } else if (build) {
+  // Counted as queued before it is READY: whoever sees it READY sees its library coming.
+  if (!fetching && build) {
     builds_queued_.fetch_add(1, std::memory_order_relaxed);
     f.setCompileStage(CompileStage::Queued);
   }
   f.setTraceSeconds(secondsSince(started));
-  f.ready(evaluator);
+  f.ready(evaluator);  // ignored when a fetched library made it READY first
   log_.info("function_traced", {{"function_id", f.id()},
                                 {"function", f.functionName()},
                                 {"seconds", secondsSince(started)},
                                 {"instructions", instructions},
                                 {"nodes", nodes}});
 
-  if (fetching) {
-    fetch_queue_.post([this, function, build] { fetch(function, build); });
-    return;
-  }
-  if (!settings_.compile) return;
+  if (fetching || !settings_.compile) return;
   if (!build) {
     buildFailed(function, "the library cannot be built: " + key_problem);
     return;

@@ -38,7 +38,14 @@ void FunctionEntry::ready(std::shared_ptr<const Evaluator> evaluator) {
 }
 
 void FunctionEntry::swap(std::shared_ptr<const Evaluator> evaluator) {
-  evaluator_.store(std::move(evaluator), std::memory_order_release);
+  {
+    std::lock_guard lock(mutex_);
+    if (state() == rpc::FunctionState::Failed) return;
+    evaluator_.store(std::move(evaluator), std::memory_order_release);
+    if (state() == rpc::FunctionState::Ready) return;
+    state_.store(rpc::FunctionState::Ready, std::memory_order_release);
+  }
+  settled_.notify_all();
 }
 
 void FunctionEntry::fail(StatusCode code, std::string message) {

@@ -66,7 +66,10 @@ class FunctionEntry {
 
   // BUILDING -> READY. Ignored unless BUILDING.
   void ready(std::shared_ptr<const Evaluator> evaluator);
-  // READY: the compiled library replaces the interpreter.
+  // The compiled library serves from now on: it replaces the interpreter of a READY
+  // function, or makes a BUILDING one READY (a robot's library that arrived while the
+  // interpreter was still being traced; the later ready() is then ignored). Ignored for a
+  // FAILED function.
   void swap(std::shared_ptr<const Evaluator> evaluator);
   // BUILDING -> FAILED with the status GetFunction replies. Ignored unless BUILDING.
   void fail(StatusCode code, std::string message);
