@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/schema/message_json.hpp"
+
 #include "commands/commands.hpp"
 #include "output/human_units.hpp"
 #include "output/output_table.hpp"
@@ -71,28 +73,6 @@ nlohmann::ordered_json healthJson(const rpc::HealthReply& h, const ServiceConnec
           {"server", c.address}};
 }
 
-nlohmann::ordered_json fleetJson(const rpc::FleetFigures& f) {
-  nlohmann::ordered_json peers = nlohmann::ordered_json::array();
-  for (const rpc::FleetPeer& p : f.peers)
-    peers.push_back({{"service", p.service},
-                     {"instance_id", p.instance_id},
-                     {"reachable", p.reachable},
-                     {"artifacts_fetched", p.artifacts_fetched},
-                     {"bytes_fetched", p.bytes_fetched},
-                     {"refusals", p.refusals},
-                     {"failures", p.failures},
-                     {"last_problem", p.last_problem}});
-  return {{"role", f.role},
-          {"target", f.target},
-          {"artifacts_fetched", f.artifacts_fetched},
-          {"bytes_fetched", f.bytes_fetched},
-          {"artifacts_refused", f.artifacts_refused},
-          {"fetch_failures", f.fetch_failures},
-          {"artifacts_served", f.artifacts_served},
-          {"bytes_served", f.bytes_served},
-          {"builds_for_robots", f.builds_for_robots},
-          {"peers", peers}};
-}
 
 void printHealth(const rpc::HealthReply& h, const ServiceConnection& c) {
   const double uptime = static_cast<double>(h.uptime_ns) / 1e9;
@@ -181,7 +161,7 @@ void health(const HealthArgs& args) {
   const std::optional<rpc::FleetFigures> fleet = fleetStatus(c);
   if (args.json) {
     nlohmann::ordered_json out = healthJson(reply, c);
-    if (fleet) out["fleet"] = fleetJson(*fleet);
+    if (fleet) out["fleet"] = rpc::messageJson(*fleet);
     std::cout << out.dump() << "\n";
     return;
   }

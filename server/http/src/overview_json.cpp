@@ -3,6 +3,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/schema/message_json.hpp"
+
 #include "robodiff/server/dashboard.hpp"
 
 namespace robodiff::server {
@@ -57,26 +59,9 @@ json jobJson(const rpc::JobInfo& j) {
 // This server's part in a fleet: every FleetFigures field, the peers (a robot's build
 // hosts) as objects. A ServiceMetrics made without a role is standalone.
 json fleetJson(const rpc::FleetFigures& f) {
-  json peers = json::array();
-  for (const rpc::FleetPeer& p : f.peers)
-    peers.push_back({{"service", p.service},
-                     {"instance_id", p.instance_id},
-                     {"reachable", p.reachable},
-                     {"artifacts_fetched", p.artifacts_fetched},
-                     {"bytes_fetched", p.bytes_fetched},
-                     {"refusals", p.refusals},
-                     {"failures", p.failures},
-                     {"last_problem", p.last_problem}});
-  return {{"role", f.role.empty() ? "standalone" : f.role},
-          {"target", f.target},
-          {"artifacts_fetched", f.artifacts_fetched},
-          {"bytes_fetched", f.bytes_fetched},
-          {"artifacts_refused", f.artifacts_refused},
-          {"fetch_failures", f.fetch_failures},
-          {"artifacts_served", f.artifacts_served},
-          {"bytes_served", f.bytes_served},
-          {"builds_for_robots", f.builds_for_robots},
-          {"peers", std::move(peers)}};
+  json j = rpc::messageJson(f);
+  if (f.role.empty()) j["role"] = "standalone";
+  return j;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace robodiff::server::config_values {
 namespace {
@@ -133,32 +134,30 @@ std::string formatDirectoryList(const std::vector<std::filesystem::path>& dirs) 
   return text;
 }
 
-std::vector<std::string> parseNameList(const std::string& value) {
+namespace {
+
+// "a, b": names whose characters are letters, digits and `extra`; `what` names the kind
+// in the error.
+std::vector<std::string> splitNames(const std::string& value, std::string_view extra, const char* what) {
   std::vector<std::string> names;
   std::stringstream in(value);
   for (std::string name; std::getline(in, name, ',');) {
     name = trim(name);
     if (name.empty()) continue;
     for (const char ch : name)
-      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '.')
-        throw std::invalid_argument("names '" + name + "', which is not a host name");
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && extra.find(ch) == std::string_view::npos)
+        throw std::invalid_argument("names '" + name + "', which is not " + what);
     names.push_back(name);
   }
   return names;
 }
 
+}  // namespace
+
+std::vector<std::string> parseNameList(const std::string& value) { return splitNames(value, "-.", "a host name"); }
+
 std::vector<std::string> parseServiceNames(const std::string& value) {
-  std::vector<std::string> names;
-  std::stringstream in(value);
-  for (std::string name; std::getline(in, name, ',');) {
-    name = trim(name);
-    if (name.empty()) continue;
-    for (const char ch : name)
-      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_')
-        throw std::invalid_argument("names '" + name + "', which is not a DDS service name (letters, digits, '_')");
-    names.push_back(name);
-  }
-  return names;
+  return splitNames(value, "_", "a DDS service name (letters, digits, '_')");
 }
 
 std::string formatNameList(const std::vector<std::string>& names) {

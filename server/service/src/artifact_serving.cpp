@@ -20,15 +20,6 @@ std::int64_t unixNow() {
       .count();
 }
 
-workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
-  workers::CachedBuilderOptions o;
-  o.compiler = s.compiler;
-  o.compiler_memory_limit_bytes = s.compiler_memory_limit_bytes;
-  o.job_timeout = s.build_timeout;
-  o.urdf_limits = s.urdf_limits;
-  return o;
-}
-
 std::string signedName(const std::string& key, bool include_sources) {
   return key + (include_sources ? "+src" : "");
 }

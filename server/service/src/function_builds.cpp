@@ -15,6 +15,8 @@ namespace {
 
 double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+}  // namespace
+
 workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
   workers::CachedBuilderOptions o;
   o.compiler = s.compiler;
@@ -23,8 +25,6 @@ workers::CachedBuilderOptions builderOptions(const BuildSettings& s) {
   o.urdf_limits = s.urdf_limits;
   return o;
 }
-
-}  // namespace
 
 const char* toString(FailureStage stage) {
   switch (stage) {

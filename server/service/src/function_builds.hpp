@@ -76,6 +76,9 @@ struct BuildFailureRecord {
   bool interpreter_serves() const { return stage == FailureStage::Compile; }
 };
 
+// The CachedBuilder's options for these settings (the service's and a build host's builds).
+workers::CachedBuilderOptions builderOptions(const BuildSettings& settings);
+
 class FunctionBuilds {
  public:
   // Called with a function that failed (it never became READY), on a build thread.
