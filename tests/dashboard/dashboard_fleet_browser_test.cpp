@@ -110,9 +110,11 @@ TEST(DashboardFleet, PanelHiddenWhenStandaloneShownForRobotAndBuildHostsAsText) 
   const std::string evil_problem = "<img src=x onerror=\"window.__injected = 1\">bad signature";
   robot["peers"] = {{{"service", "robodiff_build_a"}, {"instance_id", "builder-a:42:x"}, {"reachable", true},
                      {"artifacts_fetched", 4}, {"bytes_fetched", 2 << 20}, {"refusals", 0}, {"failures", 1},
+                     {"fetch_seconds", 0.25},
                      {"last_problem", "lost after 0 of 9 bytes"}},
                     {{"service", "<b>evil</b>"}, {"instance_id", ""}, {"reachable", false}, {"artifacts_fetched", 1},
-                     {"bytes_fetched", 1 << 20}, {"refusals", 1}, {"failures", 7}, {"last_problem", evil_problem}}};
+                     {"bytes_fetched", 1 << 20}, {"refusals", 1}, {"failures", 7}, {"fetch_seconds", 12.0},
+                     {"last_problem", evil_problem}}};
   fleetPageShow(browser, fleetPageOverview(robot),
                 std::string(kFleetRole) + " === 'robot host' && document.querySelectorAll('#fleet-peers tbody tr')"
                                           ".length === 2");
@@ -136,9 +138,9 @@ TEST(DashboardFleet, PanelHiddenWhenStandaloneShownForRobotAndBuildHostsAsText) 
   ASSERT_EQ(shown["rows"].size(), 2u) << shown;
   EXPECT_EQ(shown["rows"][0]["host"], "robodiff_build_a");
   EXPECT_EQ(shown["rows"][0]["cells"], json::parse(R"(["robodiff_build_a", "builder-a:42:x", "yes", "4", "2.0 MiB",
-                                                       "0", "1", "lost after 0 of 9 bytes"])"));
+                                                       "250 ms", "0", "1", "lost after 0 of 9 bytes"])"));
   EXPECT_EQ(shown["rows"][1]["host"], "<b>evil</b>");
-  EXPECT_EQ(shown["rows"][1]["cells"], json({"<b>evil</b>", "never reached", "no", "1", "1.0 MiB", "1", "7",
+  EXPECT_EQ(shown["rows"][1]["cells"], json({"<b>evil</b>", "never reached", "no", "1", "1.0 MiB", "12.0 s", "1", "7",
                                              evil_problem}));
   EXPECT_EQ(shown["elements"], 0) << "a string from the network became HTML";
   EXPECT_EQ(shown["injected"], false);

@@ -319,8 +319,8 @@ TEST(DdsCodec, FleetStatusBothWays) {
   EXPECT_TRUE(viaRequest(rpc::FleetStatusRequest{true}).verbose);
   rpc::FleetStatusReply in;
   in.fleet = {"robot", "x86-64-v3", 11, 1ull << 35, 2, 3, 0, 0, 0, {}};
-  in.fleet.peers = {{"build-a", "robodiffd-1", true, 10, 1ull << 34, 1, 0, "signature by an untrusted key"},
-                    {"build-b", "", false, 0, 0, 0, 5, "no answer within 2 s"}};
+  in.fleet.peers = {{"build-a", "robodiffd-1", true, 10, 1ull << 34, 1, 0, 0.75, "signature by an untrusted key"},
+                    {"build-b", "", false, 0, 0, 0, 5, 0.0, "no answer within 2 s"}};
   const rpc::FleetFigures f = viaReply(in).fleet;
   EXPECT_EQ(f.role, "robot");
   EXPECT_EQ(f.target, "x86-64-v3");

@@ -43,6 +43,8 @@ TEST(Fleet, BuiltOnceOnTheBuildHostThenServedCompiledByEveryRobot) {
     EXPECT_EQ(fleet_figures.peers[0].service, "fleet_build");
     EXPECT_TRUE(fleet_figures.peers[0].reachable);
     EXPECT_GT(fleet_figures.peers[0].bytes_fetched, 10000u);
+    EXPECT_GT(fleet_figures.peers[0].fetch_seconds, 0.0);
+    EXPECT_LT(fleet_figures.peers[0].fetch_seconds, 30.0);
     EXPECT_FALSE(fleet_figures.target.empty());
   }
   // The robot's cache holds one verified entry built for its level, never for `native`.

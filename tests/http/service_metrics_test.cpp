@@ -131,6 +131,7 @@ const std::vector<std::string> kFleetRobotFamilies = {
     "robodiff_fleet_artifacts_refused_total",      "robodiff_fleet_fetch_failures_total",
     "robodiff_fleet_peer_artifacts_fetched_total", "robodiff_fleet_peer_bytes_fetched_total",
     "robodiff_fleet_peer_refusals_total",          "robodiff_fleet_peer_failures_total",
+    "robodiff_fleet_peer_fetch_seconds_total",
     "robodiff_fleet_peer_reachable"};
 const std::vector<std::string> kFleetBuildFamilies = {"robodiff_fleet_artifacts_served_total",
                                                       "robodiff_fleet_bytes_served_total",
@@ -165,8 +166,8 @@ server::ServiceMetrics fleetRobotMetrics() {
   f.bytes_fetched = 123456789;
   f.artifacts_refused = 1;
   f.fetch_failures = 2;
-  f.peers.push_back({"robodiff_build_a", "builder-a:42:x", true, 4, 100000000, 0, 1, "lost after 0 of 9 bytes"});
-  f.peers.push_back({"odd \"host\"\\b\nz", "", false, 1, 23456789, 1, 7, "refused: signature does not verify"});
+  f.peers.push_back({"robodiff_build_a", "builder-a:42:x", true, 4, 100000000, 0, 1, 2.5, "lost after 0 of 9 bytes"});
+  f.peers.push_back({"odd \"host\"\\b\nz", "", false, 1, 23456789, 1, 7, 0.125, "refused: signature does not verify"});
   return m;
 }
 
@@ -193,6 +194,8 @@ TEST(ServiceMetrics, ARobotHostShowsItsFleetCountsPerBuildHost) {
   EXPECT_EQ(p.value("robodiff_fleet_peer_bytes_fetched_total", a), 100000000.0);
   EXPECT_EQ(p.value("robodiff_fleet_peer_refusals_total", a), 0.0);
   EXPECT_EQ(p.value("robodiff_fleet_peer_failures_total", a), 1.0);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_fetch_seconds_total", a), 2.5);
+  EXPECT_EQ(p.value("robodiff_fleet_peer_fetch_seconds_total", b), 0.125);
   EXPECT_EQ(p.value("robodiff_fleet_peer_reachable", a), 1.0);
   EXPECT_EQ(p.value("robodiff_fleet_peer_artifacts_fetched_total", b), 1.0);
   EXPECT_EQ(p.value("robodiff_fleet_peer_bytes_fetched_total", b), 23456789.0);

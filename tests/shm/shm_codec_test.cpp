@@ -237,8 +237,8 @@ TEST(ShmCodec, FleetStatus) {
   EXPECT_TRUE(roundTrip(rpc::FleetStatusRequest{true}).verbose);
   rpc::FleetStatusReply in;
   in.fleet = {"robot", "x86-64-v4", 1, 2, 3, 4, 5, 6, 7, {}};
-  in.fleet.peers = {{"build-a", "robodiffd-9", true, 8, 9, 10, 11, "hash mismatch in lib.so"},
-                    {"build-b", "", false, 0, 0, 0, 0, ""}};
+  in.fleet.peers = {{"build-a", "robodiffd-9", true, 8, 9, 10, 11, 1.5, "hash mismatch in lib.so"},
+                    {"build-b", "", false, 0, 0, 0, 0, 0.0, ""}};
   const rpc::FleetFigures f = roundTrip(in).fleet;
   EXPECT_EQ(f.role, "robot");
   EXPECT_EQ(f.target, "x86-64-v4");

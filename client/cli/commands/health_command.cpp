@@ -117,7 +117,7 @@ void printHealth(const rpc::HealthReply& h, const ServiceConnection& c) {
 void printPeer(const rpc::FleetPeer& p) {
   std::cout << p.service << " (" << (p.instance_id.empty() ? "never reached" : p.instance_id) << "): "
             << (p.reachable ? "reachable" : "unreachable") << "; " << p.artifacts_fetched << " fetched ("
-            << formatBytes(p.bytes_fetched) << "), " << p.refusals << " refused, " << p.failures << " failed";
+            << formatBytes(p.bytes_fetched) << " in " << p.fetch_seconds << " s), " << p.refusals << " refused, " << p.failures << " failed";
   if (!p.last_problem.empty()) std::cout << "; last problem: " << p.last_problem;
   std::cout << "\n";
 }

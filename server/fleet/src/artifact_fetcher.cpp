@@ -201,7 +201,7 @@ std::string ArtifactFetcher::transfer(fleet::BuildHostLink& host, Attempt& attem
     const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
     fetched_.fetch_add(1, std::memory_order_relaxed);
     bytes_.fetch_add(receiver.payloadBytes(), std::memory_order_relaxed);
-    host.delivered(receiver.payloadBytes());
+    host.delivered(receiver.payloadBytes(), seconds);
     log_.info("fleet_artifact_fetched",
               {{"function_id", attempt.function_id}, {"build_host", host.service()}, {"key", offer.key},
                {"bytes", receiver.payloadBytes()}, {"seconds", seconds}, {"signer", result.signer}});

@@ -54,10 +54,11 @@ Status BuildHostLink::chunk(const rpc::FetchArtifactChunkRequest& request, rpc::
   return answered(connection_->call(client::FetchArtifactChunkCall{&request, &reply}, {call_timeout_}));
 }
 
-void BuildHostLink::delivered(std::uint64_t bytes) {
+void BuildHostLink::delivered(std::uint64_t bytes, double seconds) {
   std::lock_guard lock(mutex_);
   ++peer_.artifacts_fetched;
   peer_.bytes_fetched += bytes;
+  peer_.fetch_seconds += seconds;
 }
 
 void BuildHostLink::refused(const std::string& problem) {

@@ -23,7 +23,7 @@ class BuildHostLink {
   Status chunk(const rpc::FetchArtifactChunkRequest& request, rpc::FetchArtifactChunkReply& reply);
 
   // Counts for FleetStatus.
-  void delivered(std::uint64_t bytes);
+  void delivered(std::uint64_t bytes, double seconds);
   void refused(const std::string& problem);
   void failed(const std::string& problem);
   rpc::FleetPeer figures() const;

@@ -41,6 +41,9 @@ void robotFleetFamilies(MetricsText& t, const rpc::FleetFigures& f) {
            MetricType::Counter, [](const rpc::FleetPeer& p) { return d(p.artifacts_fetched); });
   per_peer("robodiff_fleet_peer_bytes_fetched_total", "Bytes of the libraries fetched from a build host.",
            MetricType::Counter, [](const rpc::FleetPeer& p) { return d(p.bytes_fetched); });
+  per_peer("robodiff_fleet_peer_fetch_seconds_total",
+           "Seconds spent transferring, verifying and filing the libraries fetched from a build host.",
+           MetricType::Counter, [](const rpc::FleetPeer& p) { return p.fetch_seconds; });
   per_peer("robodiff_fleet_peer_refusals_total",
            "Libraries from a build host that failed verification (thrown away).", MetricType::Counter,
            [](const rpc::FleetPeer& p) { return d(p.refusals); });

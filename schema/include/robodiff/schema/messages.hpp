@@ -371,10 +371,11 @@ struct FleetPeer {
   std::string instance_id;             // the server that last answered; empty: never reached
   bool reachable = false;              // its last call got an answer
   std::uint64_t artifacts_fetched = 0, bytes_fetched = 0, refusals = 0, failures = 0;
+  double fetch_seconds = 0;            // the fetched ones' transfer, verification and filing, added up
   std::string last_problem;            // the latest refusal or failure
 };
 ROBODIFF_FIELDS(FleetPeer, service, instance_id, reachable, artifacts_fetched, bytes_fetched, refusals, failures,
-                last_problem);
+                fetch_seconds, last_problem);
 
 // This server's part in a fleet (docs/fleet.md).
 struct FleetFigures {
