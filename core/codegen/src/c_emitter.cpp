@@ -49,6 +49,14 @@ std::string prologue(const CodegenOptions& options) {
        "#define RD_HIDDEN\n"
        "#define RD_EXPORT\n"
        "#define RD_SCALAR_PART\n"
+       "#endif\n"
+       "/* Single-knot code at most 128 bits wide: gcc otherwise packs independent stores into\n"
+       "   512-bit registers on AVX-512 CPUs, measured 25% slower per call (docs/code-generation.md).\n"
+       "   The batched code keeps the full width. */\n"
+       "#if defined(__GNUC__) && !defined(__TINYC__) && !defined(__clang__) && defined(__x86_64__)\n"
+       "#define RD_SCALAR_FN __attribute__((target(\"prefer-vector-width=128\")))\n"
+       "#else\n"
+       "#define RD_SCALAR_FN\n"
        "#endif\n\n"
        "/* RD_W knots per SIMD chunk of the batched entry point (GNU vector extensions). */\n";
   if (options.batch_width == 1) {
@@ -504,7 +512,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     ChunkPrinter scalar(f, Flavour::Scalar), vector(f, Flavour::Vector);
     main << "/* ---- " << f.name << ": " << lowered.operations << " operations, " << parts << " part(s) ---- */\n\n";
     if (parts == 1) {
-      main << scalar.print("static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n"
+      main << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n"
            << "#if RD_VECTOR\n"
            << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
            << "#endif\n\n";
@@ -513,7 +521,8 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
         const std::string part = prefix + "_p" + std::to_string(p);
         std::ostringstream file;
         file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
-             << scalar.print("RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, lowered.chunks[p]) << "\n"
+             << scalar.print("RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, lowered.chunks[p])
+             << "\n"
              << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
              << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p], p == 0) << "#endif\n";
         lib.sources.push_back({f.name + "_part" + std::to_string(p) + ".c", file.str()});

@@ -1,0 +1,74 @@
+// Single-knot code at most 128 bits wide (RD_SCALAR_FN in c_emitter.cpp): on AVX-512 CPUs
+// gcc otherwise packs independent stores into 512-bit registers, measured 25% slower per
+// call (docs/code-generation.md); the batched code keeps the full width. Checked on the
+// compiled library's disassembly, against the same source with the attribute taken out.
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "codegen_fixtures.hpp"
+#include "robodiff/codegen/c_emitter.hpp"
+#include "robodiff/codegen/compiler.hpp"
+#include "support/process.hpp"
+#include "support/temp_dir.hpp"
+
+namespace robodiff::codegen {
+namespace {
+
+using namespace testing;
+using robodiff::testing::ProcessResult;
+using robodiff::testing::runCommand;
+using robodiff::testing::TempDir;
+
+bool cpuHasAvx512() {
+  std::ifstream in("/proc/cpuinfo");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str().find(" avx512f") != std::string::npos;
+}
+
+// The disassembly of function `symbol` in `library` (objdump -d).
+std::string disassembly(const std::filesystem::path& library, const std::string& symbol) {
+  const ProcessResult r = runCommand("objdump -d --no-show-raw-insn " + library.string());
+  const std::string header = "<" + symbol + ">:\n";
+  const auto begin = r.out.find(header);
+  if (begin == std::string::npos) return {};
+  return r.out.substr(begin, r.out.find("\n\n", begin) - begin);
+}
+
+std::filesystem::path compiled(const GeneratedLibrary& lib, const std::filesystem::path& out) {
+  CompilerOptions options;
+  options.compiler = "gcc";
+  options.native = true;
+  return compileLibrary(lib, out, options).library;
+}
+
+TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot) {
+  if (!cpuHasAvx512()) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
+  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
+  Graph g;
+  FunctionDefinition f = chainFunction(g, "fk", 12);
+  CodegenOptions options;
+  options.split_threshold = 1u << 30;  // one part: rd_fk_eval
+  GeneratedLibrary lib = generateLibrary(g, {f}, options);
+  TempDir dir;
+  const std::filesystem::path with = compiled(lib, dir / "with.so");
+  // The same source with the attribute taken out: what gcc does on its own.
+  std::string& text = lib.sources.at(0).text;
+  const std::string attribute = "__attribute__((target(\"prefer-vector-width=128\")))";
+  ASSERT_NE(text.find(attribute), std::string::npos);
+  text.replace(text.find(attribute), attribute.size(), "");
+  const std::filesystem::path without = compiled(lib, dir / "without.so");
+
+  const std::string eval_without = disassembly(without, "rd_fk_eval");
+  ASSERT_FALSE(eval_without.empty()) << "no rd_fk_eval in " << without;
+  EXPECT_NE(eval_without.find("zmm"), std::string::npos) << "gcc no longer packs this function: pick another";
+  const std::string eval_with = disassembly(with, "rd_fk_eval");
+  EXPECT_EQ(eval_with.find("zmm"), std::string::npos) << eval_with;
+  // The batched entry point (its chunk inlined there) keeps the full width.
+  EXPECT_NE(runCommand("objdump -d --no-show-raw-insn " + with.string()).out.find("zmm"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace robodiff::codegen
