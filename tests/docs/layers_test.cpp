@@ -1,9 +1,10 @@
 // docs/architecture.md's layers hold in the code: a layer folder includes the headers and
 // links the libraries of its own layer and of layers below it only. core/ and schema/ are
 // at the bottom (schema, the wire types, uses nothing else), then cache, then workers and
-// runtime, then batch, then client and server; folders on one level never use each other.
-// So workers/ never includes or links batch/ (the robodiff-worker program that runs batch
-// jobs is built in batch/jobs), and client/ and server/ meet only in schema.
+// runtime, then batch, then client and server; folders on one level never use each other
+// but for one named crossing (serverUsesClientTransport). So workers/ never includes or
+// links batch/ (the robodiff-worker program that runs batch jobs is built in batch/jobs).
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -31,6 +32,16 @@ const std::map<std::string, int>& layerLevels() {
 
 bool mayUse(const std::string& user, const std::string& used) {
   return user == used || layerLevels().at(used) < layerLevels().at(user);
+}
+
+// The one crossing between client and server (docs/architecture.md): a robot host's
+// robodiffd calls its build hosts as a DDS client (server/fleet), through the client's
+// transport layer only, never its API or CLI.
+bool serverUsesClientTransport(const std::string& user, const std::string& name) {
+  static const std::vector<std::string> allowed = {"robodiff/client/dds_connection.hpp",
+                                                   "robodiff/client/connection.hpp", "robodiff::client_dds",
+                                                   "robodiff::client_connection"};
+  return user == "server" && std::find(allowed.begin(), allowed.end(), name) != allowed.end();
 }
 
 // Who provides what: include directories ("model" of robodiff/model/ -> "core") and CMake
@@ -110,7 +121,7 @@ std::vector<std::string> upwardIncludes(const fs::path& root, const LayerMap& ma
       const auto provider = map.include_dirs.find(m[2].str());
       if (provider == map.include_dirs.end()) continue;  // not a layer's header
       if (seen) ++*seen;
-      if (!mayUse(layer, provider->second))
+      if (!mayUse(layer, provider->second) && !serverUsesClientTransport(layer, m[1].str()))
         problems.push_back(pathInTree(root, file) + ":" + std::to_string(line_number) + " includes " + m[1].str() +
                            " (" + provider->second + ")");
     }
@@ -133,7 +144,7 @@ std::vector<std::string> upwardLinks(const fs::path& root, const LayerMap& map, 
       if (layerLevels().count((*m)[1].str())) used["${CMAKE_SOURCE_DIR}/" + (*m)[1].str()] = (*m)[1].str();
     for (const auto& [name, provider] : used) {
       if (seen) ++*seen;
-      if (!mayUse(layer, provider)) problems.push_back(pathInTree(root, file) + " uses " + name + " (" + provider + ")");
+      if (!mayUse(layer, provider) && !serverUsesClientTransport(layer, name)) problems.push_back(pathInTree(root, file) + " uses " + name + " (" + provider + ")");
     }
   }
   return problems;
@@ -193,6 +204,11 @@ TEST(Architecture, TheChecksFindWorkersUsingBatch) {
   EXPECT_FALSE(mayUse("client", "server"));
   EXPECT_FALSE(mayUse("workers", "runtime"));
   EXPECT_TRUE(mayUse("server", "batch"));
+  // The one crossing is the client's transport, from server/ only.
+  EXPECT_TRUE(serverUsesClientTransport("server", "robodiff/client/dds_connection.hpp"));
+  EXPECT_FALSE(serverUsesClientTransport("server", "robodiff/client/client.hpp"));
+  EXPECT_FALSE(serverUsesClientTransport("server", "robodiff::client"));
+  EXPECT_FALSE(serverUsesClientTransport("batch", "robodiff::client_dds"));
 }
 
 }  // namespace

@@ -21,6 +21,12 @@
 
 namespace robodiff::testing {
 
+// The fleet's DDS domain: one no other test uses (testDomain() gives 1..200 by process id,
+// tests/dds 201..229), so that no other test's client meets these robodiffds, whose service
+// is the default "robodiff". The fleet tests run one at a time (the roudi lock). 230: the
+// last domain a DDS Security governance may name (Cyclone refuses 231 and 232 there).
+inline const bool kFleetDomainChosen = ::setenv("ROBODIFF_TEST_DDS_DOMAIN", "230", 1) == 0;
+
 // RNEA and its Jacobian for this CPU (the default -march=native): a robot asks its build
 // hosts for its own x86-64 level instead. O1 keeps the builds short.
 inline const char* kFleetSpec =
