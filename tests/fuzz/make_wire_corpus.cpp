@@ -74,7 +74,7 @@ rpc::FleetStatusReply fleetReply() {
   r.fleet.target = "x86-64-v3";
   r.fleet.artifacts_fetched = 2;
   r.fleet.bytes_fetched = 4096;
-  r.fleet.peers = {{"build-a", "robodiffd-b", true, 2, 4096, 1, 0, "signature by an untrusted key"}};
+  r.fleet.peers = {{"build-a", "robodiffd-b", true, 2, 4096, 1, 0, 0.5, "signature by an untrusted key"}};
   return r;
 }
 
