@@ -66,3 +66,41 @@ TEST(FleetTarget, AutoIsTheHighestLevelThisCpuRunsAndOthersAreChecked) {
 
 }  // namespace
 }  // namespace robodiff::testing
+
+namespace robodiff::testing {
+namespace {
+
+// robodiffd with `sets` (--set each) on an empty cache: its exit code and log.
+ProcessResult robodiffdWith(const std::filesystem::path& dir, const std::vector<std::string>& sets) {
+  std::string command = "timeout 20 " + shellQuote(robodiffdPath().string()) +
+                        " --no-iceoryx --no-http --dds-domain " + std::to_string(testDomain()) + " --cache " +
+                        shellQuote((dir / "cache").string());
+  for (const std::string& s : sets) command += " --set " + shellQuote(s);
+  return runCommand(command);
+}
+
+TEST(FleetSettings, ARoleWithoutWhatItNeedsIsRefusedAtStartNamingTheKey) {
+  FleetHosts fleet;
+  ProcessResult r = robodiffdWith(fleet.path(), {"fleet.role=build"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("fleet.signing_key"), std::string::npos) << r.err;
+  r = robodiffdWith(fleet.path(), {"fleet.role=robot", "fleet.build_hosts=somewhere"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("fleet.trusted_keys"), std::string::npos) << r.err;
+  r = robodiffdWith(fleet.path(), {"fleet.role=robot", "fleet.trusted_keys=" + fleet.publicKey().string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("fleet.build_hosts"), std::string::npos) << r.err;
+  r = robodiffdWith(fleet.path(), {"fleet.role=robot", "fleet.build_hosts=a-b"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a DDS service name"), std::string::npos) << r.err;
+  // A signing key others may read is refused, naming the file and the fix.
+  std::filesystem::permissions(fleet.signingKey(), std::filesystem::perms::group_read,
+                               std::filesystem::perm_options::add);
+  r = robodiffdWith(fleet.path(), {"fleet.role=build", "fleet.signing_key=" + fleet.signingKey().string()});
+  EXPECT_NE(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(fleet.signingKey().string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("chmod"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace robodiff::testing
