@@ -179,7 +179,7 @@ TEST_F(DdsTransport, FleetMethodsRoundTrip) {
     if (chunk.data.empty()) break;
     fetched.insert(fetched.end(), chunk.data.begin(), chunk.data.end());
   }
-  EXPECT_EQ(fetched, FakeService::artifactPayload());
+  EXPECT_EQ(fetched, testing::fakeArtifactPayload());
   const rpc::FetchArtifactChunkRequest unknown{"key-2", false, 0, 0};
   rpc::FetchArtifactChunkReply none;
   EXPECT_EQ(connection.call(client::UnaryCall{client::FetchArtifactChunkCall{&unknown, &none}}, {}).code,

@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "support/fake_artifact.hpp"
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::testing {
@@ -109,25 +110,11 @@ class FakeService : public server::ServiceApi {
     return {};
   }
 
-  // FetchArtifactChunk of artifact "key-1" (artifactPayload(), 100 bytes a chunk unless
-  // asked for fewer). QueryArtifact and FleetStatus keep ServiceApi's defaults: not a build
-  // host, standalone.
+  // FetchArtifactChunk: support/fake_artifact.hpp's artifact. QueryArtifact and FleetStatus
+  // keep ServiceApi's defaults: not a build host, standalone.
   Status fetchArtifactChunk(const server::CallContext&, const rpc::FetchArtifactChunkRequest& request,
                             rpc::FetchArtifactChunkReply& reply) override {
-    if (request.key != "key-1") return {StatusCode::NotFound, "no artifact " + request.key};
-    const std::vector<std::uint8_t> payload = artifactPayload();
-    const std::size_t from = static_cast<std::size_t>(std::min<std::uint64_t>(request.offset, payload.size()));
-    const std::size_t n = std::min<std::size_t>(payload.size() - from, request.max_bytes ? request.max_bytes : 100);
-    reply.offset = request.offset;
-    reply.payload_bytes = payload.size();
-    reply.data.assign(payload.begin() + from, payload.begin() + from + n);
-    return {};
-  }
-  // 300 bytes with runs of zeros and of 0xff.
-  static std::vector<std::uint8_t> artifactPayload() {
-    std::vector<std::uint8_t> bytes(300);
-    for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = i % 50 < 5 ? 0 : i % 50 < 10 ? 0xff : i * 37 % 256;
-    return bytes;
+    return testing::fakeArtifactChunk(request, reply);
   }
 
   Status shape(std::string_view function_id, server::FunctionShape& shape) override {

@@ -126,7 +126,7 @@ TEST_F(ShmTransport, FleetMethodsRoundTrip) {
     EXPECT_LE(chunk.data.size(), 100u);
     fetched.insert(fetched.end(), chunk.data.begin(), chunk.data.end());
   }
-  EXPECT_EQ(fetched, FakeService::artifactPayload());
+  EXPECT_EQ(fetched, testing::fakeArtifactPayload());
 }
 
 TEST_F(ShmTransport, EvaluateAndBatchValues) {
