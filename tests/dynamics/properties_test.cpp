@@ -71,6 +71,18 @@ TEST_P(Properties, MassMatrixIsSymmetricPositiveDefinite) {
   }
 }
 
+// The two forms of CRBA (joint frames, world frame) are the same M, and give the same M^-1.
+TEST_P(Properties, MassMatrixInJointFramesEqualsItInTheWorldFrame) {
+  Data<double> data(model);
+  for (int s = 0; s < kSamples; ++s) {
+    const Eigen::VectorXd q = randomState(s).q;
+    const Eigen::MatrixXd M = crba(model, data, q);
+    EXPECT_TRUE(matricesAgree(crbaWorldFrame(model, data, q), M, 1e-12));
+    const Eigen::MatrixXd Minv = computeMinverse(model, data, q);
+    EXPECT_TRUE(matricesAgree(computeMinverse(model, data, q, CrbaFrame::World), Minv, 1e-9));
+  }
+}
+
 TEST_P(Properties, RneaIsMassMatrixTimesAPlusNonLinearEffects) {
   Data<double> data(model);
   for (int s = 0; s < kSamples; ++s) {

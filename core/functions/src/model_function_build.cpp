@@ -172,7 +172,8 @@ class ModelFunctionBuild {
     rneaPartials();
     if (aba_analytic_) {
       Data<Sym> d(model_);
-      minv_ = tracer_.outputs(computeMinverse(model_, d, q_plain_));
+      // World-frame M: it shares oMi and the subspace columns with RNEA's partials.
+      minv_ = tracer_.outputs(computeMinverse(model_, d, q_plain_, CrbaFrame::World));
       mass_factors_ = tracer_.outputs(d.M);  // L^T D L of M (lower triangle), n x n row-major
     }
     rnea_from_partials_ = spec_.function == ModelFunction::Rnea && !rnea_partials_.empty();

@@ -6,6 +6,7 @@
 
 #include "robodiff/model/model.hpp"
 #include "robodiff/spatial/force.hpp"
+#include "robodiff/spatial/inertia.hpp"
 #include "robodiff/spatial/motion.hpp"
 #include "robodiff/spatial/se3.hpp"
 
@@ -32,6 +33,37 @@ template <class S> struct InertiaSum {
   Force<S> operator*(const Motion<S>& v) const {
     return {mass * v.linear - h.cross(v.angular), h.cross(v.linear) + rotational * v.angular};
   }
+
+  // A body's inertia in this form (constants when S is symbolic).
+  static InertiaSum of(const Inertia<double>& body) {
+    InertiaSum y;
+    y.mass = S(body.mass);
+    y.h = (body.mass * body.lever).template cast<S>();
+    y.rotational = body.inertiaAboutOrigin().template cast<S>();
+    return y;
+  }
+
+  // This inertia (given in frame b) expressed in frame a, with aMb = (R, p). With
+  // h_r = R h: h' = h_r + m p and, about the new origin,
+  // I' = R I R^T + (2 p.h_r + m |p|^2) 1 - (h_r p^T + p h_r^T + m p p^T).
+  InertiaSum transformedBy(const SE3<S>& aMb) const {
+    const Mat3<S>& R = aMb.rotation;
+    const Vec3<S>& p = aMb.translation;
+    InertiaSum out;
+    out.mass = mass;
+    const Vec3<S> hr = R * h;
+    out.h = hr + mass * p;
+    const Mat3<S> RI = R * rotational;
+    const S trace_term = S(2) * p.dot(hr) + mass * p.squaredNorm();
+    for (int r = 0; r < 3; ++r)
+      for (int k = r; k < 3; ++k) {
+        S value = RI.row(r).dot(R.row(k)) - (hr[r] * p[k] + p[r] * hr[k] + mass * (p[r] * p[k]));
+        if (r == k) value += trace_term;
+        out.rotational(r, k) = value;
+        out.rotational(k, r) = value;
+      }
+    return out;
+  }
 };
 
 template <class S> struct Data {
@@ -40,7 +72,7 @@ template <class S> struct Data {
         v(model.njoints()), a(model.njoints()), c(model.njoints()), f(model.njoints()),
         tau(VecX<S>::Zero(model.nv)), ddq(VecX<S>::Zero(model.nv)),
         M(MatX<S>::Zero(model.nv, model.nv)), J(Matrix6X<S>::Zero(6, model.nv)), Ag(Matrix6X<S>::Zero(6, model.nv)),
-        oYcrb(model.njoints()), Ia(model.njoints()), pA(model.njoints()),
+        Ycrb(model.njoints()), Ia(model.njoints()), pA(model.njoints()),
         U(model.njoints()), Dinv(model.njoints()), u(model.njoints()) {
     for (int j = 0; j < model.njoints(); ++j) {
       int nv = model.joints[j].nv;
@@ -63,7 +95,7 @@ template <class S> struct Data {
   Matrix6X<S> J;   // joint Jacobian columns in the world frame (crba, computeJointJacobians)
   Matrix6X<S> Ag;  // CRBA: composite inertia times J, per column
 
-  std::vector<InertiaSum<S>> oYcrb;  // CRBA: composite inertias in the world frame
+  std::vector<InertiaSum<S>> Ycrb;   // CRBA: composite inertias, each in its joint's frame
   std::vector<Mat6<S>> Ia;           // ABA: articulated inertias
   std::vector<Force<S>> pA;          // ABA: bias forces
   std::vector<JointBlock<S>> U;

@@ -41,9 +41,12 @@ template <class S> void factorizeMassMatrix(const std::vector<int>& lambda, MatX
   }
 }
 
-// M^-1 (nv x nv, symmetric), with M from crba(model, data, q); data.M holds the factors.
-template <class S, class Q> MatX<S> computeMinverse(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q) {
-  crba(model, data, q);
+// M^-1 (nv x nv, symmetric), with M from crba(model, data, q, frame); data.M holds the
+// factors. CrbaFrame::World where the trace has the world placements already.
+template <class S, class Q>
+MatX<S> computeMinverse(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
+                        CrbaFrame frame = CrbaFrame::Joint) {
+  crba(model, data, q, frame);
   MatX<S>& LD = data.M;  // only the lower triangle is read and written
   const std::vector<int> lambda = dofParents(model);
   factorizeMassMatrix(lambda, LD);
