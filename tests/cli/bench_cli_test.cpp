@@ -174,6 +174,35 @@ TEST(BenchCli, MarkdownAndKeptLibrariesForASmallChain) {
     EXPECT_TRUE(fs::exists(keep / f / (std::string(f) + ".so"))) << f;
 }
 
+// --keep DIR --reuse: a second run loads the libraries the first kept (it says so, and has
+// no build rows) and times them; a kept source that no longer matches what this run
+// generates is built again; --reuse without --keep is refused naming --keep.
+TEST(BenchCli, ReuseLoadsWhatAnEarlierRunKeptOnlyWhenItsSourcesMatch) {
+  const ChainDir chain(2);
+  const fs::path keep = chain.dir() / "libs";
+  const std::string kept = " --keep " + shellQuote(keep.string());
+  testing::ProcessResult r = runCommand(bench(chain.urdf(), "--json --quick --copies 1" + kept));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(findRow(nlohmann::json::parse(r.out).at("rows"), "build.aba_jacobian.total"), nullptr);
+  {  // one kept source spoiled: that library is built again, the others are reused
+    std::ofstream spoil(keep / "aba_value" / "src" / "library.c", std::ios::app);
+    spoil << "/* changed */\n";
+  }
+  r = runCommand(bench(chain.urdf(), "--json --quick --copies 1 --reuse" + kept));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("reusing the kept rnea_jacobian_dense"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("generating aba_value"), std::string::npos) << r.err;
+  const nlohmann::json rows = nlohmann::json::parse(r.out).at("rows");
+  EXPECT_EQ(findRow(rows, "build.rnea_jacobian_dense.total"), nullptr);
+  EXPECT_NE(findRow(rows, "build.aba_value.total"), nullptr);
+  ASSERT_NE(findRow(rows, "rnea_jacobian_dense"), nullptr);
+  EXPECT_GT(number(*findRow(rows, "rnea_jacobian_dense")), 0.0);
+  EXPECT_LE(nlohmann::json::parse(r.out).at("checks").at("interpreter_vs_compiled_rnea_jacobian").get<double>(), 1e-9);
+  r = runCommand(bench(chain.urdf(), "--quick --reuse"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--keep"), std::string::npos) << r.err;
+}
+
 // --copies N: each library is loaded from N files (the built one and N - 1 copies of
 // it), the timing line says the rows are medians over them, and a count out of range is
 // refused naming the option.

@@ -8,14 +8,17 @@
 // base) the figures of Pinocchio and CppADCodeGen on this machine kind are shown, and
 // the targets get PASS or MISS. `--spec FILE` adds a function of the user's
 // own (bench_fixtures.hpp, userBenchSpecs): built, timed and checked against the
-// interpreter like the rest.
+// interpreter like the rest. `--keep DIR --reuse` times again what an earlier run kept
+// (bench_kept_library.hpp), without building.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "commands/bench_fixtures.hpp"
+#include "commands/bench_kept_library.hpp"
 #include "commands/bench_timing.hpp"
 #include "commands/commands.hpp"
 #include "output/bench_report.hpp"
@@ -34,6 +37,7 @@ struct Options {
   std::string urdf, keep;
   std::vector<std::string> specs;  // --spec: user functions timed too
   bool floating_base = false, json = false, markdown = false, quick = false;
+  bool reuse = false;  // --reuse: load what an earlier run kept in --keep DIR
   int copies = 3;
 };
 
@@ -62,7 +66,8 @@ class BenchRun {
     timeFiniteDifferences();
     for (Generated* g : {&gen("rnea_jacobian_dense"), &gen("aba_jacobian")}) timeBatch(*g);
     checkResults();
-    for (const Generated& g : gens_) addGenerationRows(g);
+    for (const Generated& g : gens_)
+      if (!g.reused) addGenerationRows(g);
     if (!o_.keep.empty()) progress("libraries kept in " + dir_.path().string());
     if (o_.json) std::cout << report_.toJson().dump(2) << "\n";
     else if (o_.markdown) report_.printMarkdown(std::cout);
@@ -127,15 +132,23 @@ class BenchRun {
     LibraryOptions options;
     options.compiler.jobs = 0;  // one per hardware thread
     options.builder.name = s.name;
-    progress("generating " + g.name + " ...");
-    const auto t0 = std::chrono::steady_clock::now();
-    g.lib = generateFunctionLibrary(model_, g.spec, dir_.path() / s.name, options);
-    g.total_seconds = secondsSince(t0);
-    g.process_peak_bytes = processPeakBytes();
-    char line[200];
-    std::snprintf(line, sizeof line, "  %.3f s (compile %.3f s), %u operations", g.total_seconds, g.lib.compile.seconds,
-                  g.lib.info.operations);
-    progress(line);
+    std::optional<GeneratedFunctionLibrary> kept;
+    if (o_.reuse) kept = keptLibrary(model_, g.spec, dir_.path() / s.name, options);
+    if (kept) {
+      g.lib = std::move(*kept);
+      g.reused = true;
+      progress("reusing the kept " + g.name + " (" + std::to_string(g.lib.info.operations) + " operations)");
+    } else {
+      progress("generating " + g.name + " ...");
+      const auto t0 = std::chrono::steady_clock::now();
+      g.lib = generateFunctionLibrary(model_, g.spec, dir_.path() / s.name, options);
+      g.total_seconds = secondsSince(t0);
+      g.process_peak_bytes = processPeakBytes();
+      char line[200];
+      std::snprintf(line, sizeof line, "  %.3f s (compile %.3f s), %u operations", g.total_seconds,
+                    g.lib.compile.seconds, g.lib.info.operations);
+      progress(line);
+    }
     g.copies.push_back(codegen::LoadedLibrary::open(g.lib.library).function(s.name));
     for (int c = 1; c < o_.copies; ++c) {
       const fs::path copy = dir_.path() / (s.name + "_copy" + std::to_string(c) + ".so");
@@ -421,8 +434,12 @@ void addBenchCommand(CLI::App& app) {
                   "against the interpreter (checks.interpreter_vs_compiled_NAME)")
       ->type_name("SPEC.json")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--keep", options->keep,
-                  "Build the libraries in DIR and keep them (default: a temporary directory, removed)");
+  auto* keep = cmd->add_option("--keep", options->keep,
+                               "Build the libraries in DIR and keep them (default: a temporary directory, removed)");
+  cmd->add_flag("--reuse", options->reuse,
+                "Load each library an earlier run kept in --keep DIR when it is the one this run would build (same "
+                "spec, same generated C) instead of building it again; a reused library has no build rows")
+      ->needs(keep);
   cmd->callback([options] { BenchRun(*options).run(); });
 }
 

@@ -79,6 +79,7 @@ struct Generated {
   GeneratedFunctionLibrary lib;
   double total_seconds = 0;
   std::uint64_t process_peak_bytes = 0;
+  bool reused = false;  // loaded from an earlier run's --keep DIR: no build measured
   // The library loaded from `copies` files (the built one first): identical bytes on
   // other pages, because where a library's pages land moves its speed by up to 2x.
   std::vector<codegen::CompiledFunction> copies;
