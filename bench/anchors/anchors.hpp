@@ -94,7 +94,14 @@ struct CodegenOptions {
   std::vector<std::string> only;  // rows to build (empty: all)
   // Also the step rows but step_cost_derivatives (fixed base, nq = nv only).
   bool step_rows = false;
+  // Build (or, with reuse, keep) the libraries, neither check nor time them: bench/anchors
+  // builds every library first, several at once, then times them with reuse.
+  bool build_only = false;
 };
+// The rows each generated side builds (the step rows only with step_rows).
+std::vector<std::string> codegenRowNames(bool step_rows);
+std::vector<std::string> casadiRowNames(bool step_rows);
+
 std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
                                        const std::vector<State>& checks, const Timing& plan,
                                        const CodegenOptions& options);

@@ -169,7 +169,7 @@ RowResult runCasadiRow(const std::string& row, const pinocchio::Model& model, co
     std::fprintf(stderr, "anchors_bench: CasADi building %s ...\n", row.c_str());
     buildInChild(dir, library, options.cap_seconds, [&] { generateAndCompileCasadi(row, tree); }, r);
   }
-  if (r.status != "ok") return r;
+  if (r.status != "ok" || options.build_only) return r;
   CasadiLibrary lib(library, casadiFunctionName(row));
   for (const State& s : checks) {
     lib.bind(row, model, s);
@@ -183,6 +183,12 @@ RowResult runCasadiRow(const std::string& row, const pinocchio::Model& model, co
 
 }  // namespace
 
+std::vector<std::string> casadiRowNames(bool step_rows) {
+  std::vector<std::string> names = kCasadiRows;
+  if (step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
+  return names;
+}
+
 std::string casadiVersion() {
   char version[64] = "";
   casadi_codegen::casadiVersion(version, sizeof version);
@@ -193,9 +199,7 @@ std::vector<RowResult> runCasadi(const pinocchio::Model& model, const State& tim
                                  const Timing& plan, const CodegenOptions& options) {
   const casadi_codegen::Tree tree = treeOf(model);
   std::vector<RowResult> rows;
-  std::vector<std::string> names = kCasadiRows;
-  if (options.step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
-  for (const std::string& row : names) {
+  for (const std::string& row : casadiRowNames(options.step_rows)) {
     if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), row) == options.only.end()) {
       RowResult skipped;
       skipped.name = row, skipped.status = "skipped";

@@ -1,8 +1,9 @@
 """bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio,
 CppADCodeGen and CasADi; on a fixed base also the step rows of Pinocchio and crocoddyl) and
-`robodiff bench --json` (with the CRBA and frame-Jacobian specs, builtin_rows.py, and on a
-fixed base the step rows' specs, step_specs.py; all in specs/), two rounds,
-keeps the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
+`robodiff bench --json` (with the CRBA and frame-Jacobian specs, builtin_rows.py, and the
+step rows' specs, step_specs.py; all in specs/), two rounds, after a build phase that builds
+every anchor's library and the checks' libraries several at once (build_phase.py), keeps
+the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
 --backend generated`) against Pinocchio's at the anchors' check states, and prints one
 table per robot.
 
@@ -17,6 +18,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import build_phase  # noqa: E402
 import report  # noqa: E402
 import robots  # noqa: E402
 import step_specs  # noqa: E402
@@ -34,6 +36,8 @@ def parse_args():
     p.add_argument("--quick", action="store_true", help="shorter timing on every side (noisier)")
     p.add_argument("--rounds", type=int, default=2, help="alternating rounds; the minimum per cell is kept")
     p.add_argument("--cap", type=float, default=120, help="seconds a CppADCodeGen library may take to build")
+    p.add_argument("--build-jobs", type=int, default=os.cpu_count() or 1,
+                   help="libraries built at once in the build phase (default: the cores; 1: each build alone)")
     p.add_argument("--bench", required=True, help="anchors_bench executable")
     p.add_argument("--robodiff", required=True, help="robodiff CLI executable")
     p.add_argument("--work", required=True, help="working directory (libraries, outputs)")
@@ -48,20 +52,22 @@ def run(cmd, **kw):
     return proc.stdout
 
 
-def anchors_round(args, robot, work, reuse):
-    out = os.path.join(work, f"anchors_{'reuse' if reuse else 'cold'}.json")
+def anchors_round(args, robot, work, round_number):
+    """anchors_bench on the libraries of the build phase (--reuse)."""
+    out = os.path.join(work, f"anchors_round{round_number}.json")
     cmd = [args.bench, "--urdf", robot.urdf, "--out", out, "--workdir", os.path.join(work, "cppadcodegen"),
-           "--cap", str(args.cap)]
+           "--cap", str(args.cap), "--reuse"]
     cmd += ["--floating-base"] if robot.floating_base else []
     cmd += ["--quick"] if args.quick else []
-    cmd += ["--reuse"] if reuse else []
     run(cmd)
     with open(out) as f:
         return json.load(f)
 
 
-def robodiff_round(args, robot, specs):
-    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json"]
+def robodiff_round(args, robot, specs, work, reuse):
+    """robodiff bench: the first round builds cold (its build rows), later ones reuse those libraries."""
+    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json", "--keep", os.path.join(work, "robodiff_bench")]
+    cmd += ["--reuse"] if reuse else []
     cmd += ["--floating-base"] if robot.floating_base else []
     cmd += ["--quick"] if args.quick else []
     for path in specs:
@@ -155,18 +161,24 @@ def measure(args, robot):
     os.makedirs(work, exist_ok=True)
     result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
               "rows": {}, "builds": {}, "checks": {}}
-    first, specs, step_paths = None, [], []
+    first, generated = None, build_phase.generated_rows(args.bench, robot, work)
+    # CRBA, frame J and the step rows, robodiff's side through specs (the frame: the anchors' last)
+    step_paths = [] if robot.floating_base else step_specs.write_specs(generated["frame"], work)
+    specs = builtin_rows.write_specs(generated["frame"], work) + step_paths
+    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS if step_paths]
+    checked_functions = [(function, derivatives) for _, function, derivatives in COMPUTE_CHECKS]
+    jobs = build_phase.anchor_jobs(args, robot, work, generated)
+    jobs.insert(1, build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(work, "robodiff_cache"),
+                                                  checked_functions, checked_specs))
+    build_phase.build_all(robot.title, jobs, args.build_jobs)
     for r in range(args.rounds):
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio, CppADCodeGen, CasADi ...",
               file=sys.stderr)
-        data = anchors_round(args, robot, work, reuse=r > 0)
-        if first is None:  # CRBA and frame J on every robot, the step rows on a fixed base only
-            step_paths = [] if robot.floating_base else step_specs.write_specs(data["frame"], work)
-            specs = builtin_rows.write_specs(data["frame"], work) + step_paths
+        data = anchors_round(args, robot, work, r + 1)
         first = first or data
         merge_anchors(result, data)
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: robodiff bench ...", file=sys.stderr)
-        merge_robodiff(result, robodiff_round(args, robot, specs))
+        merge_robodiff(result, robodiff_round(args, robot, specs, work, reuse=r > 0))
         mujoco_side.measure_round(args.bench, robot, work, first, args.quick, result)
     result["nq"], result["nv"] = first["nq"], first["nv"]
     result["casadi_version"] = first.get("casadi_version")

@@ -198,13 +198,17 @@ Output outputOf(const std::string& row, const pinocchio::Model& m, LoadedModel& 
 
 }  // namespace
 
+std::vector<std::string> codegenRowNames(bool step_rows) {
+  std::vector<std::string> names = kRows;
+  if (step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
+  return names;
+}
+
 std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const State& timed,
                                        const std::vector<State>& checks, const Timing& plan,
                                        const CodegenOptions& options) {
   std::vector<RowResult> rows;
-  std::vector<std::string> names = kRows;
-  if (options.step_rows) names.insert(names.end(), kGeneratedStepRows.begin(), kGeneratedStepRows.end());
-  for (const std::string& name : names) {
+  for (const std::string& name : codegenRowNames(options.step_rows)) {
     RowResult r;
     r.name = name;
     if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), name) == options.only.end()) {
@@ -218,7 +222,7 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
       const auto build = [&] { generateAndCompile(name, model, timed); };
       buildInChild(dir, libraryPath(dir, name), options.cap_seconds, build, r);
     }
-    if (r.status != "ok") {
+    if (r.status != "ok" || options.build_only) {
       rows.push_back(std::move(r));
       continue;
     }

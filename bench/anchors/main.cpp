@@ -7,7 +7,11 @@
 //   anchors_bench --urdf FILE [--floating-base] --out FILE --workdir DIR
 //                 [--quick] [--cap SECONDS] [--reuse] [--seed N] [--checks N]
 //                 [--codegen-rows a,b,...] [--no-codegen] [--no-casadi]
+//                 [--build-only | --list-rows]
 // (CasADi's libraries go to WORKDIR/casadi; --codegen-rows, --cap and --reuse apply to both.)
+// --build-only builds the generated sides' libraries and stops (no timing, no checks);
+// --list-rows writes to --out which libraries each generated side builds for the robot.
+// compare.py runs one --build-only per library, several at once, then times with --reuse.
 #include <pinocchio/parsers/urdf.hpp>
 
 #include <algorithm>
@@ -27,6 +31,7 @@ constexpr double kLimit = 1e-9;  // relative error a side may have against Pinoc
 struct Args {
   std::string urdf, out, workdir;
   bool floating_base = false, quick = false, reuse = false, codegen = true, casadi = true;
+  bool build_only = false, list_rows = false;
   double cap = 120;
   unsigned seed = 1;
   int checks = 3;
@@ -51,6 +56,8 @@ Args parseArgs(int argc, char** argv) {
     else if (k == "--floating-base") a.floating_base = true;
     else if (k == "--quick") a.quick = true;
     else if (k == "--reuse") a.reuse = true;
+    else if (k == "--build-only") a.build_only = true;
+    else if (k == "--list-rows") a.list_rows = true;
     else if (k == "--no-codegen") a.codegen = false;
     else if (k == "--no-casadi") a.casadi = false;
     else if (k == "--cap") a.cap = std::stod(args.value());
@@ -149,13 +156,57 @@ void checkAgainst(const std::vector<anchors::RowResult>& reference, std::vector<
   }
 }
 
+// The generated-code anchors tape the step where q_next's coordinates are its tangent.
+bool generatedStepRows(const Args& a, const pinocchio::Model& model) {
+  return !a.floating_base && model.nq == model.nv;
+}
+
+std::string namesJson(const std::vector<std::string>& names) {
+  std::string o = "[";
+  for (size_t k = 0; k < names.size(); ++k) o += (k ? "," : "") + quoted(names[k]);
+  return o + "]";
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+// --list-rows: {"cppadcodegen": [rows], "casadi": [rows], "frame": name}.
+int listRows(const Args& a, const pinocchio::Model& model) {
+  const bool steps = generatedStepRows(a, model);
+  writeText(a.out, "{\"cppadcodegen\":" + namesJson(anchors::codegenRowNames(steps)) +
+                       ",\"casadi\":" + namesJson(anchors::casadiRowNames(steps)) +
+                       ",\"frame\":" + quoted(model.frames[anchors::lastFrame(model)].name) + "}\n");
+  return 0;
+}
+
+// --build-only: the generated sides' libraries built (kept with --reuse), their build
+// outcomes written to --out; nothing timed or checked.
+int buildOnly(const Args& a, const pinocchio::Model& model, const anchors::State& timed) {
+  const anchors::Timing unused_plan = anchors::Timing::quick();
+  std::vector<anchors::RowResult> cg, cas;
+  anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
+  options.step_rows = generatedStepRows(a, model);
+  options.build_only = true;
+  if (a.codegen) cg = anchors::runCppADCodeGen(model, timed, {}, unused_plan, options);
+  options.workdir = a.workdir + "/casadi";
+  if (a.casadi) cas = anchors::runCasadi(model, timed, {}, unused_plan, options);
+  writeText(a.out, "{\"sides\":{\"cppadcodegen\":" + sideJson(cg, false) + ",\n  \"casadi\":" +
+                       sideJson(cas, false) + "}}\n");
+  return 0;
+}
+
 int run(const Args& a) {
   pinocchio::Model model;
   if (a.floating_base) pinocchio::urdf::buildModel(a.urdf, pinocchio::JointModelFreeFlyer(), model);
   else pinocchio::urdf::buildModel(a.urdf, model);
+  if (a.list_rows) return listRows(a, model);
   const anchors::Timing plan = a.quick ? anchors::Timing::quick() : anchors::Timing::full();
   const std::vector<anchors::State> states = anchors::drawStates(model, a.seed, 1 + a.checks);
   const anchors::State& timed = states.front();
+  if (a.build_only) return buildOnly(a, model, timed);
   const std::vector<anchors::State> checks(states.begin() + 1, states.end());
 
   std::fprintf(stderr, "anchors_bench: %s (nq %d, nv %d): Pinocchio ...\n", model.name.c_str(), model.nq, model.nv);

@@ -1,0 +1,79 @@
+"""bench/anchors' build phase: every library the timed rounds load is built first, several
+at once (--build-jobs, default the machine's cores), so that the rounds time with nothing
+else running and the run's wall time is not the sum of every build:
+
+- CppADCodeGen's and CasADi's libraries, one `anchors_bench --build-only` per library (each
+  built in a child process of its own that records its cold build time and the compiler's
+  peak memory, as before; the rounds then load them with --reuse);
+- the libraries robodiff's checks load, built into the checks' cache by the same
+  `robodiff compute --backend generated` calls the checks make (at a random state).
+
+robodiff bench's own cold builds are not here: its first round measures them, alone."""
+import concurrent.futures
+import json
+import os
+import subprocess
+import sys
+import time
+
+
+def base_flags(robot):
+    return ["--floating-base"] if robot.floating_base else []
+
+
+def generated_rows(bench, robot, work):
+    """anchors_bench --list-rows: {"cppadcodegen": [rows], "casadi": [rows], "frame": name}."""
+    out = os.path.join(work, "rows.json")
+    cmd = [bench, "--urdf", robot.urdf, "--out", out, "--workdir", os.path.join(work, "cppadcodegen"), "--list-rows"]
+    subprocess.run(cmd + base_flags(robot), check=True, stdout=subprocess.DEVNULL)
+    with open(out) as f:
+        return json.load(f)
+
+
+def anchor_jobs(args, robot, work, rows):
+    """(label, [command]) of each generated anchor's library, the Jacobians first (the longest)."""
+    os.makedirs(os.path.join(work, "builds"), exist_ok=True)
+    base = [args.bench, "--urdf", robot.urdf, "--workdir", os.path.join(work, "cppadcodegen"), "--cap", str(args.cap),
+            "--build-only"] + base_flags(robot)
+    jobs = []
+    for side, other in (("cppadcodegen", "--no-casadi"), ("casadi", "--no-codegen")):
+        for row in rows[side]:
+            out = os.path.join(work, "builds", f"{side}_{row}.json")
+            jobs.append((f"{side} {row}", [base + [other, "--codegen-rows", row, "--out", out]]))
+    light = ("_value",)
+    return sorted(jobs, key=lambda job: job[0].endswith(light))  # stable: Jacobians, then values
+
+
+def robodiff_check_job(robodiff, robot, cache, functions, specs):
+    """One job: the `robodiff compute --backend generated` calls that build every library the
+    checks load into their cache (functions: (name, with --derivatives); specs: files)."""
+    os.makedirs(cache, mode=0o700, exist_ok=True)
+    base = [robodiff, "compute", "--urdf", robot.urdf, "--backend", "generated", "--cache", cache,
+            "--random-state", "1"] + base_flags(robot)
+    commands = [base + ["--function", name] + (["--derivatives"] if derivatives else []) for name, derivatives in functions]
+    commands += [base + ["--spec", spec] for spec in specs]
+    return ("robodiff's checks", commands)
+
+
+def run_job(job):
+    label, commands = job
+    t0 = time.monotonic()
+    for cmd in commands:
+        proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if proc.returncode != 0:
+            tail = proc.stderr.strip().splitlines()[-3:]
+            return label, time.monotonic() - t0, f"failed ({proc.returncode}): {' '.join(cmd)}: {' / '.join(tail)}"
+    return label, time.monotonic() - t0, None
+
+
+def build_all(title, jobs, workers):
+    """Runs the jobs, `workers` at a time; an anchor build that fails stops the run (a
+    build over the cap or refused by its compiler is not a failure: anchors_bench records
+    it and the table shows it)."""
+    print(f"anchors: {title}: building {len(jobs)} libraries, {workers} at a time ...", file=sys.stderr)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
+        for done in concurrent.futures.as_completed([pool.submit(run_job, job) for job in jobs]):
+            label, seconds, problem = done.result()
+            print(f"anchors: {title}:   {label}: {seconds:.1f} s{' ' + problem if problem else ''}", file=sys.stderr)
+            if problem and not label.startswith("robodiff"):
+                raise SystemExit(f"anchors: {title}: building {label} {problem}")
