@@ -1,5 +1,6 @@
 """bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio,
-CppADCodeGen and CasADi; on a fixed base also the step rows of Pinocchio and crocoddyl) and
+CppADCodeGen and CasADi, the step rows of Pinocchio and crocoddyl, and of the generated
+sides on a fixed base) and
 `robodiff bench --json` (with the CRBA and frame-Jacobian specs, builtin_rows.py, and the
 step rows' specs, step_specs.py; all in specs/), two rounds, after a build phase that builds
 every anchor's library and the checks' libraries several at once (build_phase.py), keeps
@@ -163,9 +164,9 @@ def measure(args, robot):
               "rows": {}, "builds": {}, "checks": {}}
     first, generated = None, build_phase.generated_rows(args.bench, robot, work)
     # CRBA, frame J and the step rows, robodiff's side through specs (the frame: the anchors' last)
-    step_paths = [] if robot.floating_base else step_specs.write_specs(generated["frame"], work)
+    step_paths = step_specs.write_specs(generated["frame"], work)
     specs = builtin_rows.write_specs(generated["frame"], work) + step_paths
-    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS if step_paths]
+    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS]
     checked_functions = [(function, derivatives) for _, function, derivatives in COMPUTE_CHECKS]
     jobs = build_phase.anchor_jobs(args, robot, work, generated)
     jobs.insert(1, build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(work, "robodiff_cache"),

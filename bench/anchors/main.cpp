@@ -1,7 +1,7 @@
 // anchors_bench: times Pinocchio's analytic algorithms and CppADCodeGen's and CasADi's
 // generated code for one robot, the same way `robodiff bench` times its own
-// (bench_timing.hpp), and on a fixed base the step rows (step_rows.hpp) of Pinocchio and
-// crocoddyl; checks CppADCodeGen's, CasADi's and crocoddyl's outputs against Pinocchio's
+// (bench_timing.hpp), and the step rows (step_rows.hpp) of Pinocchio and crocoddyl (the
+// generated sides tape them on a fixed base); checks CppADCodeGen's, CasADi's and crocoddyl's outputs against Pinocchio's
 // at a few states (1e-9 relative), and writes everything as JSON (compare.py reads it).
 //
 //   anchors_bench --urdf FILE [--floating-base] --out FILE --workdir DIR
@@ -212,7 +212,7 @@ int run(const Args& a) {
   std::fprintf(stderr, "anchors_bench: %s (nq %d, nv %d): Pinocchio ...\n", model.name.c_str(), model.nq, model.nv);
   std::vector<anchors::RowResult> pin = anchors::runPinocchio(model, timed, checks, plan);
   std::vector<anchors::RowResult> croc;
-  if (!a.floating_base) {  // the step rows are for fixed-base robots
+  {  // the step rows, on any base (a free-flyer's q_next and its tangent as Pinocchio's integrate)
     std::fprintf(stderr, "anchors_bench: %s: the Euler step and cost, Pinocchio and crocoddyl ...\n", model.name.c_str());
     const std::vector<anchors::RowResult> steps = anchors::runPinocchioStep(model, timed, checks, plan);
     pin.insert(pin.end(), steps.begin(), steps.end());

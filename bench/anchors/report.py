@@ -9,7 +9,7 @@ ROWS = [  # (row name, label); the names of `robodiff bench --json` and anchors_
     # robodiff's side through --spec (builtin_rows.py)
     ("crba_value", "CRBA value"),
     ("frame_jacobian_value", "frame Jacobian value"),
-    # user-function rows (step_rows.hpp, step_specs.py): fixed-base robots only
+    # user-function rows (step_rows.hpp, step_specs.py); CppADCodeGen, CasADi, MuJoCo: fixed base only
     ("euler_step_value", "Euler step value"),
     ("euler_step_jacobian", "Euler step + J"),
     ("step_cost_value", "step + cost value"),
@@ -24,6 +24,10 @@ SIDE_TITLES = {"pinocchio": "Pinocchio", "cppadcodegen": "CppADCodeGen", "casadi
 # the sides that build a library per row, in the build table's column order
 BUILDERS = ["cppadcodegen", "casadi", "robodiff"]
 SIDES = list(SIDE_TITLES)
+# the step rows of the generated-code sides, which tape q as its own tangent (nq = nv): on a
+# fixed base only (MuJoCo's euler_step rows say so themselves, mujoco_side.py)
+FIXED_BASE_STEP_ROWS = {side: ["euler_step_value", "euler_step_jacobian", "step_cost_value"]
+                        for side in ("cppadcodegen", "casadi")}
 ANCHORS = [s for s in SIDES if s != "robodiff"]
 
 
@@ -53,24 +57,31 @@ def ratio_to_best(row):
     return rd / min(anchors)
 
 
+def step_notes(entries, name, floating_base):
+    """A row's entries per side, with "fixed base only" for the generated-code sides' step
+    rows on a floating base."""
+    entries = dict(entries)
+    for side, rows in FIXED_BASE_STEP_ROWS.items():
+        if floating_base and name in rows:
+            entries.setdefault(side, {"us": None, "note": "fixed base only"})
+    return entries
+
+
 def robot_table(result):
     lines = [f"### {result['title']} (nq {result['nq']}, nv {result['nv']})", "",
              "| function | " + " | ".join(f"{SIDE_TITLES[s]} µs" for s in SIDES) + " | robodiff / best |",
              "|---|" + "---|" * (len(SIDES) + 1)]
     for name, label in ROWS:
-        if name in STEP_ROWS and result["floating_base"]:
-            lines.append(f"| {label} | " + " | ".join(["fixed base only"] * len(SIDES)) + " | – |")
-            continue
-        row = result["rows"].get(name, {})
+        row = step_notes(result["rows"].get(name, {}), name, result["floating_base"])
         r = ratio_to_best(row)
         lines.append(f"| {label} | " + " | ".join(cell(row.get(s)) for s in SIDES) +
                      f" | {'–' if r is None else f'{r:.2f}'} |")
     lines += ["", "| build (cold) | " + " | ".join(f"{SIDE_TITLES[b]} s | {SIDE_TITLES[b]} MiB" for b in BUILDERS) +
               " | robodiff / CppADCodeGen (s, MiB) |", "|---|" + "---|" * (2 * len(BUILDERS) + 1)]
     for name, label in ROWS:
-        if name not in BUILD_ROWS or (name in STEP_ROWS and result["floating_base"]):
+        if name not in BUILD_ROWS:
             continue
-        b = result["builds"].get(name, {})
+        b = step_notes(result["builds"].get(name, {}), name, result["floating_base"])
         cells = []
         for builder in BUILDERS:
             e = b.get(builder, {})

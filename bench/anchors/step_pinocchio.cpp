@@ -99,7 +99,10 @@ struct PinocchioStepRunner {
   }
 
   // The exact Hessian of l: central differences of the analytic gradient along each
-  // tangent direction of q (the v and u blocks are exact: 0 and 2e-3 I).
+  // tangent direction of q (the v and u blocks are exact: 0 and 2e-3 I). On a free-flyer
+  // the gradient at q (+) h e_j is in the tangent at that point, not at q: the difference
+  // from d^2 l(q (+) dq) / d dq^2 is first order in h and antisymmetric (a Lie bracket
+  // term), so the symmetric part is that Hessian.
   Eigen::MatrixXd exactHessian(const State& s) {
     const int nv = model.nv;
     Eigen::MatrixXd h = hessian;

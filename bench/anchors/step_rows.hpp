@@ -1,8 +1,11 @@
-// bench/anchors: the user-function rows, one knot of an MPC problem on a fixed-base robot.
+// bench/anchors: the user-function rows, one knot of an MPC problem, on a fixed or a
+// floating base (a free-flyer: q has nq = nv + 1 coordinates, a unit quaternion).
 //
 //   euler_step_*: semi-implicit Euler, dt = 0.01 s: v_next = v + dt ABA(q, v, u),
-//     q_next = integrate(q, dt v_next). Value [q_next; v_next]; Jacobian
-//     d[q_next (tangent), v_next] / d[q (tangent), v, u], 2nv x 3nv.
+//     q_next = integrate(q, dt v_next). Value [q_next (nq coordinates); v_next]; Jacobian
+//     d[q_next (tangent), v_next] / d[q (tangent), v, u], 2nv x 3nv: Pinocchio's dIntegrate
+//     conventions (q_next's rows in the tangent at q_next, q's columns in the tangent at q),
+//     as crocoddyl's Fx, Fu and robodiff's Jacobians of a configuration.
 //   step_cost_*: the same step and the running cost at the knot,
 //     l = |p_F(q) - target|^2 + 1e-3 |u|^2 (F: lastFrame), value [q_next; v_next; l];
 //     derivatives: the step's Jacobian, l's gradient w.r.t. [q, v, u] (3nv) and its
@@ -35,7 +38,7 @@ inline bool isStepRow(const std::string& row) {
 }
 
 // Pinocchio: aba / computeABADerivatives, dIntegrate, the frame's Jacobian, composed by
-// hand on one preallocated Data. Fixed-base models only (the caller checks).
+// hand on one preallocated Data. Any base.
 std::vector<RowResult> runPinocchioStep(const pinocchio::Model& model, const State& timed,
                                         const std::vector<State>& checks, const Timing& plan);
 

@@ -87,6 +87,7 @@ def check_robodiff(robodiff, robot, anchors, work, rel_err, run):
                 json.dump({"q": state["q"], "v": state["v"], "u": state["tau"]}, f)
             cmd = [robodiff, "compute", "--urdf", robot.urdf, "--spec", spec, "--backend", "generated",
                    "--cache", cache, "--state", path]
+            cmd += ["--floating-base"] if robot.floating_base else []
             out = step_outputs(json.loads(run(cmd, stderr=subprocess.DEVNULL)), row.startswith("step_cost"))
             ref = reference[row][k]
             for key in ("value", "jacobian", "gradient"):
