@@ -43,10 +43,35 @@ const Matrix6X<S>& computeJointJacobians(const Model& model, Data<S>& data, cons
   return data.J;
 }
 
+namespace detail {
+
+// LOCAL_WORLD_ALIGNED from the placements alone: column (joint j, k) is
+// [R s_lin + (p_j - p_f) x R s_ang; R s_ang] with oMi = (R, p_j): one cross product with the
+// joint-to-frame offset, where the world column and the shift to the frame take two.
+template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, const Data<S>& data, int frame_index) {
+  Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
+  const Vec3<S> p_frame = framePlacement(model, data, frame_index).translation;
+  for (int j = model.frames[frame_index].parent_joint; j >= 0; j = model.joints[j].parent) {
+    const Joint& joint = model.joints[j];
+    const SE3<S>& oMi = data.oMi[j];
+    const Vec3<S> offset = oMi.translation - p_frame;
+    for (int k = 0; k < joint.nv; ++k) {
+      const Motion<S> s = subspaceColumn<S>(joint, k);
+      const Vec3<S> angular = oMi.rotation * s.angular;
+      J.template block<3, 1>(3, joint.idx_v + k) = angular;
+      J.template block<3, 1>(0, joint.idx_v + k) = oMi.rotation * s.linear + offset.cross(angular);
+    }
+  }
+  return J;
+}
+
+}  // namespace detail
+
 // The 6 x nv Jacobian of a frame (after computeJointJacobians, or after
 // forwardKinematics when `data.J` is filled).
 template <class S>
 Matrix6X<S> frameJacobian(const Model& model, const Data<S>& data, int frame_index, ReferenceFrame reference) {
+  if (reference == ReferenceFrame::LocalWorldAligned) return detail::frameJacobianWorldAligned(model, data, frame_index);
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
   const Frame& frame = model.frames[frame_index];
   for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
@@ -54,12 +79,7 @@ Matrix6X<S> frameJacobian(const Model& model, const Data<S>& data, int frame_ind
     J.middleCols(joint.idx_v, joint.nv) = data.J.middleCols(joint.idx_v, joint.nv);
   }
   if (reference == ReferenceFrame::World) return J;
-  SE3<S> oMf = framePlacement(model, data, frame_index);
-  if (reference == ReferenceFrame::Local) return oMf.actInvMotions(J);
-  // Velocity of the frame origin p: v_p = v_o + w x p = v_o - p x w.
-  for (int c = 0; c < model.nv; ++c)
-    J.template block<3, 1>(0, c) -= oMf.translation.cross(Vec3<S>(J.template block<3, 1>(3, c)));
-  return J;
+  return framePlacement(model, data, frame_index).actInvMotions(J);  // LOCAL
 }
 
 // Convenience: kinematics, joint Jacobians and one frame Jacobian at q.
