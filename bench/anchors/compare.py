@@ -157,21 +157,51 @@ def check_robodiff(args, robot, anchors, work):
     return errors
 
 
+def build_everything(args, robot, work):
+    """The build phase (build_phase.py) of one robot; returns robodiff bench's --spec files:
+    CRBA, frame J and the step rows (the frame: the anchors' last)."""
+    generated = build_phase.generated_rows(args.bench, robot, work)
+    specs = builtin_rows.write_specs(generated["frame"], work) + step_specs.write_specs(generated["frame"], work)
+    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS]
+    checked_functions = [(function, derivatives) for _, function, derivatives in COMPUTE_CHECKS]
+    jobs = build_phase.anchor_jobs(args, robot, work, generated)
+    # last: its compiles use both cores, and the anchors' long builds are mostly done by then
+    jobs.append(build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(work, "robodiff_cache"),
+                                               checked_functions, checked_specs))
+    build_phase.build_all(robot.title, jobs, args.build_jobs)
+    return specs
+
+
+def record_checks(args, robot, first, work, result):
+    """Every side's errors against Pinocchio's in result["checks"]; a robodiff row that
+    disagrees loses its figure."""
+    for side, title in (("cppadcodegen", "CppADCodeGen"), ("casadi", "CasADi"), ("crocoddyl", "crocoddyl")):
+        for row in first["sides"].get(side, []):
+            if row["status"] == "ok":
+                result["checks"][f"{title} {row['name']}"] = f"{row['max_err']:.1e}"
+    print(f"anchors: {robot.title}: checking robodiff's values and Jacobians ...", file=sys.stderr)
+    errors = check_robodiff(args, robot, first, work)
+    errors.update(builtin_rows.check_robodiff(args.robodiff, robot, first, work, rel_err, run))
+    step_errors, hessian_err = step_specs.check_robodiff(args.robodiff, robot, first, work, rel_err, run)
+    errors.update(step_errors)
+    for row, err in errors.items():
+        result["checks"][f"robodiff {row}"] = f"{err:.1e}"
+        if not err <= LIMIT:
+            slot = result["rows"][row].setdefault("robodiff", {})
+            slot["us"], slot["note"] = None, f"WRONG: max err {err:.3g}"
+    result["checks"]["robodiff step_cost exact Hessian vs central differences of Pinocchio's gradient "
+                     f"(limit {step_specs.FD_HESSIAN_LIMIT:g})"] = f"{hessian_err:.1e}"
+    if not hessian_err <= step_specs.FD_HESSIAN_LIMIT:
+        slot = result["rows"]["step_cost_derivatives"].setdefault("robodiff", {})
+        slot["us"], slot["note"] = None, f"WRONG: Hessian vs FD {hessian_err:.3g}"
+
+
 def measure(args, robot):
     work = os.path.join(args.work, robot.key)
     os.makedirs(work, exist_ok=True)
     result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
               "rows": {}, "builds": {}, "checks": {}}
-    first, generated = None, build_phase.generated_rows(args.bench, robot, work)
-    # CRBA, frame J and the step rows, robodiff's side through specs (the frame: the anchors' last)
-    step_paths = step_specs.write_specs(generated["frame"], work)
-    specs = builtin_rows.write_specs(generated["frame"], work) + step_paths
-    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS]
-    checked_functions = [(function, derivatives) for _, function, derivatives in COMPUTE_CHECKS]
-    jobs = build_phase.anchor_jobs(args, robot, work, generated)
-    jobs.insert(1, build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(work, "robodiff_cache"),
-                                                  checked_functions, checked_specs))
-    build_phase.build_all(robot.title, jobs, args.build_jobs)
+    specs, first = build_everything(args, robot, work), None
     for r in range(args.rounds):
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio, CppADCodeGen, CasADi ...",
               file=sys.stderr)
@@ -183,27 +213,7 @@ def measure(args, robot):
         mujoco_side.measure_round(args.bench, robot, work, first, args.quick, result)
     result["nq"], result["nv"] = first["nq"], first["nv"]
     result["casadi_version"] = first.get("casadi_version")
-    for side, title in (("cppadcodegen", "CppADCodeGen"), ("casadi", "CasADi"), ("crocoddyl", "crocoddyl")):
-        for row in first["sides"].get(side, []):
-            if row["status"] == "ok":
-                result["checks"][f"{title} {row['name']}"] = f"{row['max_err']:.1e}"
-    print(f"anchors: {robot.title}: checking robodiff's values and Jacobians ...", file=sys.stderr)
-    errors, hessian_err = check_robodiff(args, robot, first, work), None
-    errors.update(builtin_rows.check_robodiff(args.robodiff, robot, first, work, rel_err, run))
-    if step_paths:
-        step_errors, hessian_err = step_specs.check_robodiff(args.robodiff, robot, first, work, rel_err, run)
-        errors.update(step_errors)
-    for row, err in errors.items():
-        result["checks"][f"robodiff {row}"] = f"{err:.1e}"
-        if not err <= LIMIT:
-            slot = result["rows"][row].setdefault("robodiff", {})
-            slot["us"], slot["note"] = None, f"WRONG: max err {err:.3g}"
-    if hessian_err is not None:
-        result["checks"]["robodiff step_cost exact Hessian vs central differences of Pinocchio's gradient "
-                         f"(limit {step_specs.FD_HESSIAN_LIMIT:g})"] = f"{hessian_err:.1e}"
-        if not hessian_err <= step_specs.FD_HESSIAN_LIMIT:
-            slot = result["rows"]["step_cost_derivatives"].setdefault("robodiff", {})
-            slot["us"], slot["note"] = None, f"WRONG: Hessian vs FD {hessian_err:.3g}"
+    record_checks(args, robot, first, work, result)
     return result
 
 
