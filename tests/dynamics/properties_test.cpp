@@ -76,9 +76,9 @@ TEST_P(Properties, MassMatrixInJointFramesEqualsItInTheWorldFrame) {
   Data<double> data(model);
   for (int s = 0; s < kSamples; ++s) {
     const Eigen::VectorXd q = randomState(s).q;
-    const Eigen::MatrixXd M = crba(model, data, q);
+    const Eigen::MatrixXd M = crbaJointFrames(model, data, q);
     EXPECT_TRUE(matricesAgree(crbaWorldFrame(model, data, q), M, 1e-12));
-    const Eigen::MatrixXd Minv = computeMinverse(model, data, q);
+    const Eigen::MatrixXd Minv = computeMinverse(model, data, q, CrbaFrame::Joint);
     EXPECT_TRUE(matricesAgree(computeMinverse(model, data, q, CrbaFrame::World), Minv, 1e-9));
   }
 }

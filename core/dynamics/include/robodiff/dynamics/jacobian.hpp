@@ -56,10 +56,9 @@ template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, con
     const SE3<S>& oMi = data.oMi[j];
     const Vec3<S> offset = oMi.translation - p_frame;
     for (int k = 0; k < joint.nv; ++k) {
-      const Motion<S> s = subspaceColumn<S>(joint, k);
-      const Vec3<S> angular = oMi.rotation * s.angular;
-      J.template block<3, 1>(3, joint.idx_v + k) = angular;
-      J.template block<3, 1>(0, joint.idx_v + k) = oMi.rotation * s.linear + offset.cross(angular);
+      const Motion<S> s = rotatedSubspaceColumn(joint, oMi.rotation, k);
+      J.template block<3, 1>(3, joint.idx_v + k) = s.angular;
+      J.template block<3, 1>(0, joint.idx_v + k) = s.linear + offset.cross(s.angular);
     }
   }
   return J;
@@ -82,11 +81,13 @@ Matrix6X<S> frameJacobian(const Model& model, const Data<S>& data, int frame_ind
   return framePlacement(model, data, frame_index).actInvMotions(J);  // LOCAL
 }
 
-// Convenience: kinematics, joint Jacobians and one frame Jacobian at q.
+// Convenience: kinematics and one frame Jacobian at q (and data.J, the joint Jacobians,
+// except for LOCAL_WORLD_ALIGNED, which needs only the placements).
 template <class S, class Q>
 Matrix6X<S> computeFrameJacobian(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, int frame_index,
                                  ReferenceFrame reference) {
-  computeJointJacobians(model, data, q);
+  if (reference == ReferenceFrame::LocalWorldAligned) forwardKinematics(model, data, q);
+  else computeJointJacobians(model, data, q);
   return frameJacobian(model, data, frame_index, reference);
 }
 

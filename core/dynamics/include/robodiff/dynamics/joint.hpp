@@ -90,6 +90,20 @@ template <class S> Motion<S> subspaceColumn(const Joint& joint, int k) {
   return m;
 }
 
+// R S_k: column k of the joint's motion subspace rotated by R (world-aligned axes, no
+// change of origin). Aligned axes take R's column: no products, in double too.
+template <class S> Motion<S> rotatedSubspaceColumn(const Joint& joint, const Mat3<S>& R, int k) {
+  Motion<S> m;
+  if (joint.type == JointType::FreeFlyer) {
+    (k < 3 ? m.linear : m.angular) = R.col(k % 3);
+  } else {
+    Vec3<S>& part = joint.type == JointType::Revolute ? m.angular : m.linear;
+    if (joint.axis_kind == AxisKind::Unaligned) part = R * asScalar<S>(joint.axis);
+    else part = R.col(detail::axisIndex(joint.axis_kind));
+  }
+  return m;
+}
+
 // Column k of a joint's motion subspace in the world frame, given the joint's oMi.
 template <class S> Vec6<S> worldSubspaceColumn(const Joint& joint, const SE3<S>& oMi, int k) {
   if (joint.type == JointType::Revolute && joint.axis_kind != AxisKind::Unaligned) {

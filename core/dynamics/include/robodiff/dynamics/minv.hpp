@@ -5,6 +5,7 @@
 // zeros are never touched. Branch-free on values: symbolic scalars trace it unchanged.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "robodiff/dynamics/crba.hpp"
@@ -41,12 +42,14 @@ template <class S> void factorizeMassMatrix(const std::vector<int>& lambda, MatX
   }
 }
 
-// M^-1 (nv x nv, symmetric), with M from crba(model, data, q, frame); data.M holds the
-// factors. CrbaFrame::World where the trace has the world placements already.
+// M^-1 (nv x nv, symmetric), with M from crba (the form the scalar picks, or `frame`:
+// CrbaFrame::World where the trace has the world placements already); data.M holds the
+// factors.
 template <class S, class Q>
 MatX<S> computeMinverse(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
-                        CrbaFrame frame = CrbaFrame::Joint) {
-  crba(model, data, q, frame);
+                        std::optional<CrbaFrame> frame = std::nullopt) {
+  if (frame) crba(model, data, q, *frame);
+  else crba(model, data, q);
   MatX<S>& LD = data.M;  // only the lower triangle is read and written
   const std::vector<int> lambda = dofParents(model);
   factorizeMassMatrix(lambda, LD);
