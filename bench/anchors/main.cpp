@@ -161,6 +161,13 @@ bool generatedStepRows(const Args& a, const pinocchio::Model& model) {
   return !a.floating_base && model.nq == model.nv;
 }
 
+// A generated side's options: its libraries in `workdir`, the cap, reuse and rows asked for.
+anchors::CodegenOptions codegenOptions(const Args& a, const pinocchio::Model& model, const std::string& workdir) {
+  anchors::CodegenOptions options{workdir, a.cap, a.reuse, a.codegen_rows};
+  options.step_rows = generatedStepRows(a, model);
+  return options;
+}
+
 std::string namesJson(const std::vector<std::string>& names) {
   std::string o = "[";
   for (size_t k = 0; k < names.size(); ++k) o += (k ? "," : "") + quoted(names[k]);
@@ -187,8 +194,7 @@ int listRows(const Args& a, const pinocchio::Model& model) {
 int buildOnly(const Args& a, const pinocchio::Model& model, const anchors::State& timed) {
   const anchors::Timing unused_plan = anchors::Timing::quick();
   std::vector<anchors::RowResult> cg, cas;
-  anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
-  options.step_rows = generatedStepRows(a, model);
+  anchors::CodegenOptions options = codegenOptions(a, model, a.workdir);
   options.build_only = true;
   if (a.codegen) cg = anchors::runCppADCodeGen(model, timed, {}, unused_plan, options);
   options.workdir = a.workdir + "/casadi";
@@ -219,20 +225,14 @@ int run(const Args& a) {
     croc = anchors::runCrocoddyl(model, timed, checks, plan);
     checkAgainst(pin, croc);
   }
-  // The generated-code anchors tape the step where q_next's coordinates are its tangent.
-  const bool generated_step_rows = !a.floating_base && model.nq == model.nv;
   std::vector<anchors::RowResult> cg;
   if (a.codegen) {
-    anchors::CodegenOptions options{a.workdir, a.cap, a.reuse, a.codegen_rows};
-    options.step_rows = generated_step_rows;
-    cg = anchors::runCppADCodeGen(model, timed, checks, plan, options);
+    cg = anchors::runCppADCodeGen(model, timed, checks, plan, codegenOptions(a, model, a.workdir));
     checkAgainst(pin, cg);
   }
   std::vector<anchors::RowResult> cas;
   if (a.casadi) {
-    anchors::CodegenOptions options{a.workdir + "/casadi", a.cap, a.reuse, a.codegen_rows};
-    options.step_rows = generated_step_rows;
-    cas = anchors::runCasadi(model, timed, checks, plan, options);
+    cas = anchors::runCasadi(model, timed, checks, plan, codegenOptions(a, model, a.workdir + "/casadi"));
     checkAgainst(pin, cas);
   }
 
