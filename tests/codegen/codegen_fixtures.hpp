@@ -30,12 +30,16 @@ FunctionDefinition chainFunction(Graph& g, const std::string& name, int joints);
 // A Jacobian-like sparse lower-triangular block (n x n) next to a dense vector.
 FunctionDefinition triangularFunction(Graph& g, const std::string& name, int n);
 
+// A dense n x n block that is mostly structural zeros, in runs of many lengths (a band
+// and scattered entries), one of them -0.0.
+FunctionDefinition bandedFunction(Graph& g, const std::string& name, int n);
+
 // The ops reachable from a definition's outputs.
 std::vector<bool> opsUsed(const Graph& g, const FunctionDefinition& f);
 
 // Inputs: `knots` points, uniform in [-1, 1], laid out knot by knot per block.
 std::vector<std::vector<double>> randomInputs(const FunctionDefinition& f, std::uint64_t knots, std::uint32_t seed);
-// Zero-filled output blocks for `knots` points.
+// Output blocks for `knots` points, filled with NaN: an entry a function fails to write shows.
 std::vector<std::vector<double>> outputBuffers(const FunctionDefinition& f, std::uint64_t knots);
 
 // Pointers to each block, offset to knot `knot`.

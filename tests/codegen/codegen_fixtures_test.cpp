@@ -1,6 +1,9 @@
 // The shared fixtures (codegen_fixtures.hpp), and tests that they are what they claim.
 #include "codegen_fixtures.hpp"
 
+#include <cmath>
+#include <cstdlib>
+
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -169,6 +172,22 @@ FunctionDefinition triangularFunction(Graph& g, const std::string& name, int n) 
   return f;
 }
 
+FunctionDefinition bandedFunction(Graph& g, const std::string& name, int n) {
+  std::vector<NodeId> values;
+  for (int c = 0; c < n; ++c)
+    for (int r = 0; r < n; ++r) {
+      const bool entry = std::abs(r - c) <= 1 || (r + 2 * c) % 7 == 0;
+      const NodeId x = g.input(static_cast<std::uint32_t>(r)), y = g.input(static_cast<std::uint32_t>(c));
+      values.push_back(entry ? g.binary(Op::Mul, g.unary(Op::Sin, x), y) : g.zero());
+    }
+  values[n * n - 1] = g.constant(-0.0);
+  FunctionDefinition f;
+  f.name = name;
+  f.inputs = {{"q", static_cast<std::uint32_t>(n)}};
+  f.outputs = {OutputBlock::dense("M", static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(n), values)};
+  return f;
+}
+
 std::vector<bool> opsUsed(const Graph& g, const FunctionDefinition& f) {
   std::vector<char> needed(g.size(), 0);
   for (const auto& b : f.outputs)
@@ -196,7 +215,7 @@ std::vector<std::vector<double>> randomInputs(const FunctionDefinition& f, std::
 
 std::vector<std::vector<double>> outputBuffers(const FunctionDefinition& f, std::uint64_t knots) {
   std::vector<std::vector<double>> out;
-  for (const auto& b : f.outputs) out.emplace_back(knots * b.size(), 0.0);
+  for (const auto& b : f.outputs) out.emplace_back(knots * b.size(), std::nan(""));
   return out;
 }
 

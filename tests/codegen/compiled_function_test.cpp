@@ -30,6 +30,9 @@ struct Functions {
     definitions.push_back(triangularFunction(graph, "tri", 6));
     // 300 sparse values: a block the batched chunk claims with a memset first.
     definitions.push_back(triangularFunction(graph, "tri_large", 24));
+    // Mostly zeros: stored one by one (single knots, up to 256 zeros), else one memset.
+    definitions.push_back(bandedFunction(graph, "banded", 15));
+    definitions.push_back(bandedFunction(graph, "banded_large", 40));
   }
 };
 

@@ -70,5 +70,24 @@ TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot
   EXPECT_NE(runCommand("objdump -d --no-show-raw-insn " + with.string()).out.find("zmm"), std::string::npos);
 }
 
+// A block with up to 256 structural zeros: a memset there costs ~35 ns before anything
+// else runs (gcc's inline `rep stos`), as much again as Solo-12's whole frame Jacobian, so
+// the single knot stores its zeros four at a time (256 bits), never 512.
+TEST(ScalarWidth, AFewHundredStructuralZerosAreStoredWithoutMemset) {
+  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
+  Graph g;
+  CodegenOptions options;
+  options.split_threshold = 1u << 30;  // one part: rd_banded_eval
+  GeneratedLibrary lib = generateLibrary(g, {bandedFunction(g, "banded", 15)}, options);
+  TempDir dir;
+  const std::filesystem::path library = compiled(lib, dir / "banded.so");
+  std::string eval = disassembly(library, "rd_banded_eval");
+  ASSERT_FALSE(eval.empty()) << "no rd_banded_eval in " << library;
+  EXPECT_EQ(eval.find("memset"), std::string::npos) << eval;
+  EXPECT_EQ(eval.find("rep stos"), std::string::npos) << eval;
+  if (cpuHasAvx512()) EXPECT_EQ(eval.find("zmm"), std::string::npos) << eval;
+  if (cpuHasAvx512()) EXPECT_NE(eval.find("ymm"), std::string::npos) << "no longer four zeros a store";
+}
+
 }  // namespace
 }  // namespace robodiff::codegen

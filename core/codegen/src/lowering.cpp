@@ -232,26 +232,35 @@ class Lowerer {
     }
   }
 
-  // Blocks with at least this many constant-zero entries are cleared by one ZeroOutput:
-  // thousands of single stores (a Talos Jacobian has ~2,500 zeros) cost the compiler
-  // far more than the memset costs at run time.
+  // Blocks with at least this many constant-zero entries have them cleared by one
+  // ZeroOutput (with the runs of zeros, for the C emitter to choose how): thousands of
+  // single stores (a Talos Jacobian has ~2,500 zeros) cost the compiler far more than a
+  // memset costs at run time.
   static constexpr std::uint32_t kZeroBlockMinimum = 16;
 
+  static bool isZero(const Ref& r) { return r.is_constant && r.value == 0.0 && !std::signbit(r.value); }
+
   void emitPrologue(Chunk& chunk) {
+    std::vector<std::vector<ZeroRun>> runs(f_.outputs.size());
     std::vector<std::uint32_t> zeros(f_.outputs.size(), 0);
-    for (const auto& p : prologue_)
-      if (p.ref.is_constant && p.ref.value == 0.0 && !std::signbit(p.ref.value)) ++zeros[p.block];
+    for (const auto& p : prologue_) {  // in order of block and index
+      if (!isZero(p.ref)) continue;
+      ++zeros[p.block];
+      std::vector<ZeroRun>& r = runs[p.block];
+      if (!r.empty() && r.back().start + r.back().length == p.index) ++r.back().length;
+      else r.push_back({p.index, 1});
+    }
     for (std::uint32_t b = 0; b < zeros.size(); ++b)
       if (zeros[b] >= kZeroBlockMinimum) {
         Instr ins;
         ins.kind = InstrKind::ZeroOutput;
         ins.block = b;
+        ins.index = static_cast<std::uint32_t>(chunk.zero_runs.size());
+        chunk.zero_runs.push_back(std::move(runs[b]));
         chunk.code.push_back(ins);
       }
     for (const auto& p : prologue_) {
-      if (p.ref.is_constant && p.ref.value == 0.0 && !std::signbit(p.ref.value) &&
-          zeros[p.block] >= kZeroBlockMinimum)
-        continue;
+      if (isZero(p.ref) && zeros[p.block] >= kZeroBlockMinimum) continue;
       Instr ins;
       ins.kind = InstrKind::StoreOutput;
       ins.block = p.block;

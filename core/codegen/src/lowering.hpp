@@ -8,8 +8,9 @@
 //    with the constant -1, never becomes an instruction: its consumer reads the operand
 //    negated, so the C reads `a - b`, not `a + (-b)`);
 //  - sin(x) and cos(x) of one x become one SinCos instruction;
-//  - an output block with many structural zeros (a dense Jacobian) is cleared at once
-//    (ZeroOutput, a memset) instead of one store per zero;
+//  - an output block with many structural zeros (a dense Jacobian) has them cleared by
+//    one ZeroOutput (a memset, or stores along its runs of zeros) instead of one store
+//    instruction per zero;
 //  - inputs are loaded where first used, outputs are stored right after their value is
 //    computed, so a value's slot is free once its last consumer has run;
 //  - slots are reused by liveness (a free list), keeping the working set small;
@@ -42,7 +43,7 @@ enum class InstrKind : std::uint8_t {
   SinCos,         // slot dst = sin(args[0]), slot dst2 = cos(args[0])
   StoreOutput,    // out[block][index] = args[0]
   StoreTransfer,  // work[index] = args[0]
-  ZeroOutput,     // out[block][0 .. size of the block) = 0 (before the block's other stores)
+  ZeroOutput,     // out[block] = 0 on the runs chunk.zero_runs[index] (before the block's other stores)
 };
 
 struct Instr {
@@ -53,8 +54,14 @@ struct Instr {
   std::uint32_t block = 0, index = 0;
 };
 
+// Entries [start, start + length) of an output block.
+struct ZeroRun {
+  std::uint32_t start = 0, length = 0;
+};
+
 struct Chunk {
   std::vector<Instr> code;
+  std::vector<std::vector<ZeroRun>> zero_runs;  // per ZeroOutput (its index), ascending
   std::uint32_t slots = 0;       // local slots used (highest slot + 1)
   std::uint32_t operations = 0;  // Compute + SinCos instructions
 };
