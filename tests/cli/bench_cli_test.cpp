@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -201,6 +202,25 @@ TEST(BenchCli, ReuseLoadsWhatAnEarlierRunKeptOnlyWhenItsSourcesMatch) {
   r = runCommand(bench(chain.urdf(), "--quick --reuse"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--keep"), std::string::npos) << r.err;
+}
+
+// --no-batch: every library is built with "batch": false (no SIMD batched code); the
+// batch rows still agree with single calls.
+TEST(BenchCli, NoBatchBuildsTheSingleKnotCodeAlone) {
+  const ChainDir chain(2);
+  const fs::path keep = chain.dir() / "libs";
+  const testing::ProcessResult r =
+      runCommand(bench(chain.urdf(), "--json --quick --copies 1 --no-batch --keep " + shellQuote(keep.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"rnea_value", "aba_jacobian"}) {
+    std::ifstream description(keep / f / (std::string(f) + ".json"));
+    const nlohmann::json d = nlohmann::json::parse(description);
+    EXPECT_EQ(d.at("spec").at("build").value("batch", true), false) << f;
+    std::ifstream source(keep / f / "src" / "library.c");
+    const std::string text((std::istreambuf_iterator<char>(source)), {});
+    EXPECT_NE(text.find("#define RD_VECTOR 0"), std::string::npos) << f;
+  }
+  EXPECT_LE(nlohmann::json::parse(r.out).at("checks").at("batch_vs_single_aba_jacobian").get<double>(), 1e-12);
 }
 
 // --copies N: each library is loaded from N files (the built one and N - 1 copies of

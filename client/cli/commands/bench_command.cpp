@@ -38,6 +38,7 @@ struct Options {
   std::vector<std::string> specs;  // --spec: user functions timed too
   bool floating_base = false, json = false, markdown = false, quick = false;
   bool reuse = false;  // --reuse: load what an earlier run kept in --keep DIR
+  bool no_batch = false;  // --no-batch: every library built with "batch": false
   int copies = 3;
 };
 
@@ -129,6 +130,7 @@ class BenchRun {
     g.name = s.name;
     g.label = s.label;
     g.spec = parseFunctionSpec(s.json, s.source);
+    if (o_.no_batch) g.spec.build.batch = false;
     LibraryOptions options;
     options.compiler.jobs = 0;  // one per hardware thread
     options.builder.name = s.name;
@@ -440,6 +442,10 @@ void addBenchCommand(CLI::App& app) {
                 "Load each library an earlier run kept in --keep DIR when it is the one this run would build (same "
                 "spec, same generated C) instead of building it again; a reused library has no build rows")
       ->needs(keep);
+  cmd->add_flag("--no-batch", options->no_batch,
+                "Build every library with \"batch\": false: the single-knot code alone, in about half the time (how "
+                "bench/anchors compares builds with CppADCodeGen's, which have no batched code); the batch rows "
+                "then time it knot by knot");
   cmd->callback([options] { BenchRun(*options).run(); });
 }
 

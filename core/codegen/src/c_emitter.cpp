@@ -537,30 +537,35 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     lib.functions.push_back(info);
 
     ChunkPrinter scalar(f, Flavour::Scalar), vector(f, Flavour::Vector);
+    const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
     main << "/* ---- " << f.name << ": " << lowered.operations << " operations, " << parts << " part(s) ---- */\n\n";
     if (parts == 1) {
-      main << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n"
-           << "#if RD_VECTOR\n"
-           << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
-           << "#endif\n\n";
+      main << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n";
+      if (batched)
+        main << "#if RD_VECTOR\n" << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
+             << "#endif\n\n";
     } else {
       for (std::uint32_t p = 0; p < parts; ++p) {
         const std::string part = prefix + "_p" + std::to_string(p);
         std::ostringstream file;
         file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
              << scalar.print("RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, lowered.chunks[p])
-             << "\n"
-             << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
-             << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p], p == 0) << "#endif\n";
+             << "\n";
+        if (batched)
+          file << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
+               << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p], p == 0) << "#endif\n";
         lib.sources.push_back({f.name + "_part" + std::to_string(p) + ".c", file.str()});
-        main << "RD_HIDDEN void " << part << kEvalParams << ";\n"
-             << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n#endif\n";
+        main << "RD_HIDDEN void " << part << kEvalParams << ";\n";
+        if (batched) main << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n#endif\n";
       }
       main << "\nstatic void " << prefix << "_eval" << kEvalParams << " {\n";
       for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "(in, out, w);\n";
-      main << "}\n\n#if RD_VECTOR\nstatic void " << prefix << "_chunk" << kEvalParams << " {\n";
-      for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "_v(in, out, w);\n";
-      main << "}\n#endif\n\n";
+      main << "}\n\n";
+      if (batched) {
+        main << "#if RD_VECTOR\nstatic void " << prefix << "_chunk" << kEvalParams << " {\n";
+        for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "_v(in, out, w);\n";
+        main << "}\n#endif\n\n";
+      }
     }
     main << batchEntry(f, prefix, lowered.transfer_slots) << descriptorTables(f, prefix);
 

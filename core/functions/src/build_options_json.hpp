@@ -11,6 +11,7 @@ template <class Json>
 Json buildOptionsJson(const BuildOptions& build) {
   Json j{{"optimization", build.optimization}, {"march_native", build.march_native}, {"fast_math", build.fast_math}};
   if (!build.target.empty()) j["target"] = build.target;  // absent by default: earlier keys stay
+  if (!build.batch) j["batch"] = false;                    // likewise
   return j;
 }
 

@@ -38,6 +38,11 @@ codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::
   return base;
 }
 
+codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base) {
+  if (!build.batch) base.batch_width = 1;
+  return base;
+}
+
 namespace {
 
 void writeFile(const fs::path& path, const std::string& text) {
@@ -63,7 +68,8 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   const std::string& name = result.built.definition.name;
 
   const auto t_emit = std::chrono::steady_clock::now();
-  const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition}, options.codegen);
+  const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition},
+                                                                codegenOptionsFor(spec.build, options.codegen));
   result.emit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_emit).count();
   result.info = sources.functions.at(0);
   for (const codegen::SourceFile& s : sources.sources) result.source_bytes += s.text.size();

@@ -308,17 +308,18 @@ class Parser {
     if (root.contains("build")) {
       const json& b = root["build"];
       if (!b.is_object()) fail("build", "must be an object");
-      onlyKeys(b, "build", {"optimization", "march_native", "fast_math", "target"});
+      onlyKeys(b, "build", {"optimization", "march_native", "fast_math", "target", "batch"});
       if (b.contains("optimization")) {
         spec.build.optimization = string(b["optimization"], "build.optimization");
         const std::set<std::string> levels = {"O0", "O1", "O2", "O3"};
         if (!levels.count(spec.build.optimization))
           fail("build.optimization", language::quote(spec.build.optimization) + " is not one of O0, O1, O2, O3");
       }
-      for (const char* flag : {"march_native", "fast_math"}) {
+      for (auto [flag, field] : {std::pair{"march_native", &BuildOptions::march_native},
+                                 std::pair{"fast_math", &BuildOptions::fast_math}, std::pair{"batch", &BuildOptions::batch}}) {
         if (!b.contains(flag)) continue;
         if (!b[flag].is_boolean()) fail(std::string("build.") + flag, shown(b[flag]) + " is not true or false");
-        (std::string(flag) == "march_native" ? spec.build.march_native : spec.build.fast_math) = b[flag].get<bool>();
+        spec.build.*field = b[flag].get<bool>();
       }
       if (b.contains("target")) parseTarget(b, spec.build);
     }

@@ -37,6 +37,8 @@ struct LibraryOptions {
 
 // The compiler options a spec's build section asks for, on top of `base`.
 codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::CompilerOptions base = {});
+// The code generator's options likewise ("batch": false, no SIMD batched code).
+codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base);
 
 struct GeneratedFunctionLibrary {
   BuiltFunction built;

@@ -60,6 +60,9 @@ struct BuildOptions {
   // which are stored as march_native true / false.
   std::string target;
   bool fast_math = false;           // never on unless asked: it changes results
+  // false: only the single-knot code is compiled, about half the compile time and memory;
+  // evaluate_batch then runs it knot by knot instead of several knots per SIMD register.
+  bool batch = true;
 };
 
 // A spec is either a model function ("function": "rnea", the form every earlier spec
