@@ -1,12 +1,15 @@
-"""bench/anchors' build phase: every library the timed rounds load is built first, several
-at once (--build-jobs, default the machine's cores), so that the rounds time with nothing
-else running and the run's wall time is not the sum of every build:
+"""bench/anchors' build phase: every library the timed rounds load is built first, for
+every robot at once, several at a time (--build-jobs, default the machine's cores), so
+that the rounds time with nothing else running and the run's wall time is not the sum of
+every build:
 
 - CppADCodeGen's and CasADi's libraries, one `anchors_bench --build-only` per library (each
   built in a child process of its own that records its cold build time and the compiler's
-  peak memory, as before; the rounds then load them with --reuse);
+  peak memory; the rounds then load them with --reuse). The longest go first: every
+  robot's Jacobians, the robots with the most degrees of freedom first, then the values;
 - the libraries robodiff's checks load, built into the checks' cache by the same
-  `robodiff compute --backend generated` calls the checks make (at a random state).
+  `robodiff compute --backend generated` calls the checks make (at a random state), last:
+  their compiles use both cores.
 
 robodiff bench's own cold builds are not here: its first round measures them, alone."""
 import concurrent.futures
@@ -31,28 +34,32 @@ def generated_rows(bench, robot, work):
 
 
 def anchor_jobs(args, robot, work, rows):
-    """(label, [command]) of each generated anchor's library, the Jacobians first (the longest)."""
+    """(label, [command]) of each generated anchor's library; CasADi's builds have a cap of
+    their own (--casadi-cap: their times are not what robodiff's builds are held to)."""
     os.makedirs(os.path.join(work, "builds"), exist_ok=True)
-    base = [args.bench, "--urdf", robot.urdf, "--workdir", os.path.join(work, "cppadcodegen"), "--cap", str(args.cap),
-            "--build-only"] + base_flags(robot)
+    base = [args.bench, "--urdf", robot.urdf, "--workdir", os.path.join(work, "cppadcodegen"), "--build-only"]
+    base += base_flags(robot)
     jobs = []
-    for side, other in (("cppadcodegen", "--no-casadi"), ("casadi", "--no-codegen")):
+    for side, other, cap in (("cppadcodegen", "--no-casadi", args.cap), ("casadi", "--no-codegen", args.casadi_cap)):
         for row in rows[side]:
             out = os.path.join(work, "builds", f"{side}_{row}.json")
-            jobs.append((f"{side} {row}", [base + [other, "--codegen-rows", row, "--out", out]]))
-    light = ("_value",)
-    return sorted(jobs, key=lambda job: job[0].endswith(light))  # stable: Jacobians, then values
+            jobs.append((f"{robot.title}: {side} {row}", [base + ["--cap", str(cap), other, "--codegen-rows", row, "--out", out]]))
+    return jobs
 
 
-def robodiff_check_job(robodiff, robot, cache, functions, specs):
-    """One job: the `robodiff compute --backend generated` calls that build every library the
-    checks load into their cache (functions: (name, with --derivatives); specs: files)."""
+def longest_first(jobs_by_size):
+    """[(nv, jobs)] -> one list: the Jacobians (robots by nv, descending), then the values."""
+    ordered = [job for _, jobs in sorted(jobs_by_size, key=lambda pair: -pair[0]) for job in jobs]
+    return sorted(ordered, key=lambda job: job[0].endswith("_value"))  # stable
+
+
+def robodiff_check_job(robodiff, robot, cache, specs):
+    """One job: the `robodiff compute --backend generated --spec` calls that build every
+    library the checks load into their cache."""
     os.makedirs(cache, mode=0o700, exist_ok=True)
     base = [robodiff, "compute", "--urdf", robot.urdf, "--backend", "generated", "--cache", cache,
             "--random-state", "1"] + base_flags(robot)
-    commands = [base + ["--function", name] + (["--derivatives"] if derivatives else []) for name, derivatives in functions]
-    commands += [base + ["--spec", spec] for spec in specs]
-    return ("robodiff's checks", commands)
+    return (f"{robot.title}: robodiff's checks", [base + ["--spec", spec] for spec in specs])
 
 
 def run_job(job):
@@ -66,14 +73,16 @@ def run_job(job):
     return label, time.monotonic() - t0, None
 
 
-def build_all(title, jobs, workers):
+def build_all(jobs, workers):
     """Runs the jobs, `workers` at a time; an anchor build that fails stops the run (a
     build over the cap or refused by its compiler is not a failure: anchors_bench records
     it and the table shows it)."""
-    print(f"anchors: {title}: building {len(jobs)} libraries, {workers} at a time ...", file=sys.stderr)
+    print(f"anchors: building {len(jobs)} libraries, {workers} at a time ...", file=sys.stderr)
+    t0 = time.monotonic()
     with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
         for done in concurrent.futures.as_completed([pool.submit(run_job, job) for job in jobs]):
             label, seconds, problem = done.result()
-            print(f"anchors: {title}:   {label}: {seconds:.1f} s{' ' + problem if problem else ''}", file=sys.stderr)
-            if problem and not label.startswith("robodiff"):
-                raise SystemExit(f"anchors: {title}: building {label} {problem}")
+            print(f"anchors:   {label}: {seconds:.1f} s{' ' + problem if problem else ''}", file=sys.stderr)
+            if problem and not label.endswith("robodiff's checks"):
+                raise SystemExit(f"anchors: building {label} {problem}")
+    print(f"anchors: the build phase took {(time.monotonic() - t0) / 60:.1f} min", file=sys.stderr)

@@ -1,9 +1,9 @@
-"""bench/anchors driver: for each robot, alternately runs anchors_bench (Pinocchio,
-CppADCodeGen and CasADi, the step rows of Pinocchio and crocoddyl, and of the generated
-sides on a fixed base) and
-`robodiff bench --json` (with the CRBA and frame-Jacobian specs, builtin_rows.py, and the
-step rows' specs, step_specs.py; all in specs/), two rounds, after a build phase that builds
-every anchor's library and the checks' libraries several at once (build_phase.py), keeps
+"""bench/anchors driver: after a build phase that builds every robot's anchor libraries and
+the checks' libraries several at once (build_phase.py), for each robot alternately runs
+anchors_bench (Pinocchio, CppADCodeGen and CasADi, the step rows of Pinocchio and
+crocoddyl, and of the generated sides on a fixed base) and `robodiff bench --json` (with
+the CRBA and frame-Jacobian specs, builtin_rows.py, and the step rows' specs,
+step_specs.py; all in specs/), two rounds, keeps
 the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
 --backend generated`) against Pinocchio's at the anchors' check states, and prints one
 table per robot.
@@ -37,6 +37,7 @@ def parse_args():
     p.add_argument("--quick", action="store_true", help="shorter timing on every side (noisier)")
     p.add_argument("--rounds", type=int, default=2, help="alternating rounds; the minimum per cell is kept")
     p.add_argument("--cap", type=float, default=120, help="seconds a CppADCodeGen library may take to build")
+    p.add_argument("--casadi-cap", type=float, default=60, help="seconds a CasADi library may take to build")
     p.add_argument("--build-jobs", type=int, default=os.cpu_count() or 1,
                    help="libraries built at once in the build phase (default: the cores; 1: each build alone)")
     p.add_argument("--bench", required=True, help="anchors_bench executable")
@@ -66,8 +67,10 @@ def anchors_round(args, robot, work, round_number):
 
 
 def robodiff_round(args, robot, specs, work, reuse):
-    """robodiff bench: the first round builds cold (its build rows), later ones reuse those libraries."""
-    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json", "--keep", os.path.join(work, "robodiff_bench")]
+    """robodiff bench: the first round builds cold (its build rows), later ones reuse those
+    libraries; built with "batch": false, single-knot code alone, as the anchors build theirs."""
+    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json", "--no-batch", "--keep",
+           os.path.join(work, "robodiff_bench")]
     cmd += ["--reuse"] if reuse else []
     cmd += ["--floating-base"] if robot.floating_base else []
     cmd += ["--quick"] if args.quick else []
@@ -126,9 +129,21 @@ def rel_err(actual, expected):
     return err if err == err else float("inf")
 
 
-# robodiff compute calls checked: (row, --function, with --derivatives)
-COMPUTE_CHECKS = [("rnea_value", "rnea", False), ("rnea_jacobian_dense", "rnea", True),
-                  ("aba_value", "aba", False), ("aba_jacobian", "aba", True)]
+# robodiff's built-in rows as the specs its checks build and load (with "batch": false, as
+# robodiff bench --no-batch builds them): row -> (function, the inputs of its Jacobian or None)
+CHECKED_ROWS = {"rnea_value": ("rnea", None), "rnea_jacobian_dense": ("rnea", ["q", "v", "a"]),
+                "aba_value": ("aba", None), "aba_jacobian": ("aba", ["q", "v", "tau"])}
+
+
+def write_check_specs(work):
+    """{row: spec file} of CHECKED_ROWS, written into work/."""
+    paths = {}
+    for row, (function, wrt) in CHECKED_ROWS.items():
+        outputs = [{"kind": "value"}] + ([{"kind": "jacobian", "wrt": wrt}] if wrt else [])
+        paths[row] = os.path.join(work, f"check_{row}.json")
+        with open(paths[row], "w") as f:
+            json.dump({"function": function, "outputs": outputs, "build": {"batch": False}}, f)
+    return paths
 
 
 def check_robodiff(args, robot, anchors, work):
@@ -138,13 +153,14 @@ def check_robodiff(args, robot, anchors, work):
     cache = os.path.join(work, "robodiff_cache")
     os.makedirs(cache, mode=0o700, exist_ok=True)
     errors = {}
-    for row, function, derivatives in COMPUTE_CHECKS:
+    for row, spec in write_check_specs(work).items():
+        derivatives = CHECKED_ROWS[row][1] is not None
         err = 0.0
         for k, state in enumerate(anchors["states"]):
             path = os.path.join(work, f"state{k}.json")
             with open(path, "w") as f:
                 json.dump(state, f)
-            cmd = [args.robodiff, "compute", "--urdf", robot.urdf, "--function", function, "--backend", "generated",
+            cmd = [args.robodiff, "compute", "--urdf", robot.urdf, "--spec", spec, "--backend", "generated",
                    "--cache", cache, "--state", path]
             cmd += ["--floating-base"] if robot.floating_base else []
             cmd += ["--derivatives"] if derivatives else []
@@ -157,19 +173,29 @@ def check_robodiff(args, robot, anchors, work):
     return errors
 
 
-def build_everything(args, robot, work):
-    """The build phase (build_phase.py) of one robot; returns robodiff bench's --spec files:
-    CRBA, frame J and the step rows (the frame: the anchors' last)."""
-    generated = build_phase.generated_rows(args.bench, robot, work)
-    specs = builtin_rows.write_specs(generated["frame"], work) + step_specs.write_specs(generated["frame"], work)
-    checked_specs = specs + [step_specs.value_only_spec(work, name) for name in step_specs.SPECS]
-    checked_functions = [(function, derivatives) for _, function, derivatives in COMPUTE_CHECKS]
-    jobs = build_phase.anchor_jobs(args, robot, work, generated)
-    # last: its compiles use both cores, and the anchors' long builds are mostly done by then
-    jobs.append(build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(work, "robodiff_cache"),
-                                               checked_functions, checked_specs))
-    build_phase.build_all(robot.title, jobs, args.build_jobs)
-    return specs
+class Prepared:
+    """A robot's work folder, the --spec files of its robodiff bench rounds (CRBA, frame J
+    and the step rows; the frame: the anchors' last) and its build jobs."""
+
+    def __init__(self, args, robot):
+        self.robot, self.work = robot, os.path.join(args.work, robot.key)
+        os.makedirs(self.work, exist_ok=True)
+        generated = build_phase.generated_rows(args.bench, robot, self.work)
+        self.nv = generated["nv"]
+        self.specs = builtin_rows.write_specs(generated["frame"], self.work) + \
+            step_specs.write_specs(generated["frame"], self.work)
+        checked_specs = self.specs + [step_specs.value_only_spec(self.work, name) for name in step_specs.SPECS]
+        checked_specs += list(write_check_specs(self.work).values())
+        self.anchor_jobs = build_phase.anchor_jobs(args, robot, self.work, generated)
+        self.check_job = build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(self.work, "robodiff_cache"),
+                                                        checked_specs)
+
+
+def build_everything(args, prepared):
+    """The build phase of every robot at once: the anchors' libraries, longest first, then
+    robodiff's checks (their compiles use both cores)."""
+    jobs = build_phase.longest_first([(p.nv, p.anchor_jobs) for p in prepared])
+    build_phase.build_all(jobs + [p.check_job for p in prepared], args.build_jobs)
 
 
 def record_checks(args, robot, first, work, result):
@@ -196,12 +222,11 @@ def record_checks(args, robot, first, work, result):
         slot["us"], slot["note"] = None, f"WRONG: Hessian vs FD {hessian_err:.3g}"
 
 
-def measure(args, robot):
-    work = os.path.join(args.work, robot.key)
-    os.makedirs(work, exist_ok=True)
+def measure(args, prepared):
+    robot, work = prepared.robot, prepared.work
     result = {"key": robot.key, "title": robot.title, "urdf": robot.urdf, "floating_base": robot.floating_base,
               "rows": {}, "builds": {}, "checks": {}}
-    specs, first = build_everything(args, robot, work), None
+    first = None
     for r in range(args.rounds):
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: Pinocchio, CppADCodeGen, CasADi ...",
               file=sys.stderr)
@@ -209,7 +234,7 @@ def measure(args, robot):
         first = first or data
         merge_anchors(result, data)
         print(f"anchors: {robot.title}: round {r + 1}/{args.rounds}: robodiff bench ...", file=sys.stderr)
-        merge_robodiff(result, robodiff_round(args, robot, specs, work, reuse=r > 0))
+        merge_robodiff(result, robodiff_round(args, robot, prepared.specs, work, reuse=r > 0))
         mujoco_side.measure_round(args.bench, robot, work, first, args.quick, result)
     result["nq"], result["nv"] = first["nq"], first["nv"]
     result["casadi_version"] = first.get("casadi_version")
@@ -230,7 +255,9 @@ def main():
     args = parse_args()
     t0 = time.monotonic()
     selected = robots.resolve([k for k in args.robots.split(",") if k], args.work)
-    results = [measure(args, robot) for robot in selected]
+    prepared = [Prepared(args, robot) for robot in selected]
+    build_everything(args, prepared)
+    results = [measure(args, p) for p in prepared]
     casadi = next((r["casadi_version"] for r in results if r.get("casadi_version")), "?")
     minutes = (time.monotonic() - t0) / 60
     header = (f"bench/anchors, {time.strftime('%Y-%m-%d', time.gmtime())}, {machine()}; Pinocchio 3.7.0 (pin wheel), "

@@ -180,12 +180,13 @@ void writeText(const std::string& path, const std::string& text) {
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-// --list-rows: {"cppadcodegen": [rows], "casadi": [rows], "frame": name}.
+// --list-rows: {"cppadcodegen": [rows], "casadi": [rows], "frame": name, "nv": nv}.
 int listRows(const Args& a, const pinocchio::Model& model) {
   const bool steps = generatedStepRows(a, model);
   writeText(a.out, "{\"cppadcodegen\":" + namesJson(anchors::codegenRowNames(steps)) +
                        ",\"casadi\":" + namesJson(anchors::casadiRowNames(steps)) +
-                       ",\"frame\":" + quoted(model.frames[anchors::lastFrame(model)].name) + "}\n");
+                       ",\"frame\":" + quoted(model.frames[anchors::lastFrame(model)].name) +
+                       ",\"nv\":" + std::to_string(model.nv) + "}\n");
   return 0;
 }
 
