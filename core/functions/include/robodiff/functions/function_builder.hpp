@@ -42,11 +42,10 @@ enum class RneaJacobianMethod {
 
 // The analytic RNEA derivatives keep more values alive across their sweeps (composite
 // inertias and Coriolis composites): their code is faster only when it saves enough
-// operations. Measured as medians over copies of each library (codegen 0.3.0, 2 cores;
-// identical copies differ by up to 2x with where their pages land, so one copy decides
-// nothing): the Panda's analytic Jacobian, 0.77 of the operations, 0.745 µs against 0.846
-// differentiated; the Talos's, 0.71, 4.0 against 5.08; the UR5's, 1.17, 0.54 against 0.29.
-inline constexpr double kAnalyticRneaOperationsRatio = 0.80;
+// operations. Measured on eleven robots (docs/code-generation.md), the analytic code was
+// the faster up to 0.90 of the operations (Bolt, 0.90: 1.86 against 2.07 µs; Solo-12,
+// 0.82: 3.34 against 3.95) and twice as slow at the UR5's 1.18 (0.79 against 0.40).
+inline constexpr double kAnalyticRneaOperationsRatio = 0.95;
 
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
