@@ -74,12 +74,14 @@ TEST(Interpreter, IsCompact) {
 
 // Products and sums read once are fused into their reader ((a*b)*c, (a+b)-c, ...): fewer
 // instructions run, and the results stay bit for bit those of the unfused operations.
+// (The lowering first makes every sum tree a left-deep chain, sum_chains.hpp, so the sums
+// here are chains already: c - (a+b) would reach the interpreter as (-a - b) + c.)
 TEST(Interpreter, FusesProductsAndSumsReadOnce) {
   Graph g;
   const NodeId a = g.input(0), b = g.input(1), c = g.input(2), d = g.input(3);
   const NodeId ab = g.binary(Op::Mul, a, b), cd = g.binary(Op::Add, c, d);
   const NodeId y0 = g.binary(Op::Mul, ab, c);                      // (a*b)*c
-  const NodeId y1 = g.binary(Op::Sub, d, cd);                      // d - (c+d)
+  const NodeId y1 = g.binary(Op::Sub, cd, a);                      // (c+d) - a
   const NodeId y2 = g.binary(Op::Sub, g.binary(Op::Add, a, d), b);  // (a+d) - b
   const NodeId y3 = g.binary(Op::Add, g.binary(Op::Add, b, c), a);  // (b+c) + a
   FunctionDefinition f{"fused", {{"x", 4}}, {OutputBlock::dense("y", 4, 1, {y0, y1, y2, y3})}};
@@ -90,7 +92,7 @@ TEST(Interpreter, FusesProductsAndSumsReadOnce) {
   auto out = outputBuffers(f, 1);
   interpreter.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
   const double* x = in[0].data();
-  const double expected[4] = {x[0] * x[1] * x[2], x[3] - (x[2] + x[3]), x[0] + x[3] - x[1], x[1] + x[2] + x[0]};
+  const double expected[4] = {x[0] * x[1] * x[2], x[2] + x[3] - x[0], x[0] + x[3] - x[1], x[1] + x[2] + x[0]};
   for (int i = 0; i < 4; ++i) EXPECT_EQ(out[0][i], expected[i]) << i;
 }
 

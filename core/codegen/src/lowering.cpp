@@ -5,6 +5,8 @@
 #include <limits>
 #include <unordered_map>
 
+#include "sum_chains.hpp"
+
 namespace robodiff::codegen::detail {
 namespace {
 
@@ -426,7 +428,9 @@ class Lowerer {
 }  // namespace
 
 LoweredFunction lower(const Graph& graph, const FunctionDefinition& function, const LoweringOptions& options) {
-  return Lowerer(graph, function, options).run();
+  if (!options.chain_sums) return Lowerer(graph, function, options).run();
+  const ChainedFunction chained = chainSums(graph, function);
+  return Lowerer(chained.graph, chained.function, options).run();
 }
 
 }  // namespace robodiff::codegen::detail

@@ -3,6 +3,8 @@
 // interpreter) print or run.
 //
 // What it decides, once for both back ends:
+//  - sums of several terms are chains, each product added last to a running sum, so the
+//    C compiler fuses it into a multiply-add (sum_chains.hpp; this reassociates);
 //  - only the nodes the outputs need are computed;
 //  - constants are literals and negations are operand flags (a Neg node, or a product
 //    with the constant -1, never becomes an instruction: its consumer reads the operand
@@ -77,6 +79,7 @@ struct LoweredFunction {
 struct LoweringOptions {
   std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk
   bool reuse_slots = true;            // false: every value gets a fresh slot (SSA form)
+  bool chain_sums = true;             // false: sums as the graph associates them
 };
 
 // Expects a definition that passed validate(graph).
