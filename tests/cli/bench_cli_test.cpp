@@ -223,6 +223,70 @@ TEST(BenchCli, NoBatchBuildsTheSingleKnotCodeAlone) {
   EXPECT_LE(nlohmann::json::parse(r.out).at("checks").at("batch_vs_single_aba_jacobian").get<double>(), 1e-12);
 }
 
+// `compute --backend generated --kept DIR/<row>` evaluates the library bench kept (what it
+// timed) when it is this spec's and robot's, with the reference backend's numbers; a spec
+// that builds another library, a directory with no kept library and another backend are
+// refused, named. A user spec's kept library has its inputs in the order the file gives
+// them (its blocks), not sorted by name.
+TEST(BenchCli, ComputeLoadsAKeptLibraryOnlyWhenItIsTheSpecs) {
+  const ChainDir chain(2);
+  const fs::path keep = chain.dir() / "libs", step = chain.dir() / "step.json";
+  std::ofstream(step) << R"json({"name": "step", "inputs": {"q": "configuration", "v": "nv", "u": "nv"},
+    "define": {"v_next": "v + 0.01 * aba(q, v, u)"},
+    "outputs": [{"name": "v_next", "kind": "value", "of": "v_next"},
+                {"name": "dv", "kind": "jacobian", "of": "v_next", "wrt": ["v", "u"]}], "build": {"batch": false}})json";
+  testing::ProcessResult r = runCommand(bench(chain.urdf(), "--json --quick --copies 1 --no-batch --spec " +
+                                              shellQuote(step.string()) + " --keep " + shellQuote(keep.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string step_compute = shellQuote(cliPath().string()) + " compute --urdf " +
+                                   shellQuote(chain.urdf().string()) + " --random-state 4 --spec " +
+                                   shellQuote(step.string()) + " --backend ";
+  r = runCommand(step_compute + "generated --kept " + shellQuote((keep / "step").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json step_kept = nlohmann::json::parse(r.out);
+  r = runCommand(step_compute + "interpreted");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json step_interpreted = nlohmann::json::parse(r.out);
+  for (const char* block : {"v_next", "dv"}) {
+    const auto a = step_kept.at(block).flatten(), b = step_interpreted.at(block).flatten();
+    ASSERT_EQ(a.size(), b.size()) << block;
+    for (auto it = a.begin(); it != a.end(); ++it)
+      EXPECT_NEAR(it->get<double>(), b.at(it.key()).get<double>(), 1e-10 * (1 + std::abs(b.at(it.key()).get<double>())))
+          << block << it.key();
+  }
+  const fs::path spec = chain.dir() / "rnea_jacobian.json", batched = chain.dir() / "batched.json";
+  std::ofstream(spec) << R"({"function": "rnea", "outputs": [{"kind": "value"},
+    {"kind": "jacobian", "wrt": ["q", "v", "a"]}], "build": {"batch": false}})";
+  std::ofstream(batched) << R"({"function": "rnea", "outputs": [{"kind": "value"},
+    {"kind": "jacobian", "wrt": ["q", "v", "a"]}]})";
+  const std::string compute = shellQuote(cliPath().string()) + " compute --urdf " + shellQuote(chain.urdf().string()) +
+                              " --derivatives --random-state 3 --spec ";
+  const std::string kept = " --backend generated --kept " + shellQuote((keep / "rnea_jacobian_dense").string());
+  r = runCommand(compute + shellQuote(spec.string()) + kept);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json from_kept = nlohmann::json::parse(r.out);
+  EXPECT_EQ(from_kept.at("cache"), "kept");
+  r = runCommand(compute + shellQuote(spec.string()) + " --backend reference");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json reference = nlohmann::json::parse(r.out);
+  for (const char* block : {"value", "jacobian"}) {
+    const auto a = from_kept.at(block).flatten(), b = reference.at(block).flatten();
+    ASSERT_EQ(a.size(), b.size()) << block;
+    for (auto it = a.begin(); it != a.end(); ++it)
+      EXPECT_NEAR(it->get<double>(), b.at(it.key()).get<double>(), 1e-10 * (1 + std::abs(b.at(it.key()).get<double>())))
+          << block << it.key();
+  }
+  r = runCommand(compute + shellQuote(batched.string()) + kept);  // the batched build is another library
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("is not the library this spec and robot build"), std::string::npos) << r.err;
+  r = runCommand(compute + shellQuote(spec.string()) + " --backend generated --kept " + shellQuote(keep.string()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("no kept library"), std::string::npos) << r.err;
+  r = runCommand(compute + shellQuote(spec.string()) + kept.substr(std::string(" --backend generated").size()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--backend generated"), std::string::npos) << r.err;
+}
+
 // --copies N: each library is loaded from N files (the built one and N - 1 copies of
 // it), the timing line says the rows are medians over them, and a count out of range is
 // refused naming the option.

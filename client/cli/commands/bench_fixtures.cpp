@@ -169,12 +169,12 @@ std::string readText(const std::string& path) {
 }
 
 // The spec with only its "value" outputs (empty when it has none, or nothing else).
-std::optional<nlohmann::json> valueOutputsOnly(const nlohmann::json& spec) {
-  nlohmann::json values = nlohmann::json::array();
-  for (const nlohmann::json& o : spec.at("outputs"))
+std::optional<nlohmann::ordered_json> valueOutputsOnly(const nlohmann::ordered_json& spec) {
+  nlohmann::ordered_json values = nlohmann::ordered_json::array();
+  for (const nlohmann::ordered_json& o : spec.at("outputs"))
     if (o.value("kind", "") == "value") values.push_back(o);
   if (values.empty() || values.size() == spec.at("outputs").size()) return std::nullopt;
-  nlohmann::json v = spec;
+  nlohmann::ordered_json v = spec;
   v["outputs"] = values;
   return v;
 }
@@ -193,12 +193,13 @@ std::vector<BenchSpec> userBenchSpecs(const std::vector<std::string>& paths, std
   };
   for (const std::string& path : paths) {
     const FunctionSpec parsed = loadFunctionSpec(path);  // a bad spec fails here, naming the file and field
-    const nlohmann::json spec = nlohmann::json::parse(readText(path));
+    // Keys in the order written: a user function's inputs are its blocks, in that order.
+    const nlohmann::ordered_json spec = nlohmann::ordered_json::parse(readText(path));
     const std::string name = parsed.isUser() && spec.contains("name") ? parsed.functionName() : identifierFromStem(path);
-    const std::optional<nlohmann::json> values = valueOutputsOnly(spec);
+    const std::optional<nlohmann::ordered_json> values = valueOutputsOnly(spec);
     add(path, {name, name + (values ? " (values + derivatives)" : ""), spec.dump(), path});
     if (!values) continue;
-    nlohmann::json v = *values;
+    nlohmann::ordered_json v = *values;
     if (parsed.isUser()) v["name"] = name + "_value";
     add(path, {name + "_value", name + " (values only)", v.dump(), path + " (its value outputs)"});
   }

@@ -3,7 +3,8 @@
 // (value, Jacobians, Hessians) by one of the backends (function_backends.hpp), or every
 // output of a user function, its inputs read by name (user_spec_output.hpp). The
 // generated backend takes its library from the content-addressed cache, building it
-// there when missing (cached_library.hpp), unless --no-cache.
+// there when missing (cached_library.hpp), unless --no-cache, or loads one `robodiff
+// bench --keep` kept (--kept, kept_library.hpp).
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -18,6 +19,7 @@
 #include "options/cached_library.hpp"
 #include "options/function_backends.hpp"
 #include "options/function_options.hpp"
+#include "options/kept_library.hpp"
 #include "output/output_table.hpp"
 #include "robodiff/dynamics/all.hpp"
 #include "robodiff/functions/model_function.hpp"
@@ -41,6 +43,7 @@ struct ComputeOptions {
   StateArgs state;
   std::string cache_dir, compiler;  // the generated backend's cache (empty: the default) and compiler
   bool no_cache = false;            // generated: compile into a temporary directory instead
+  std::string kept;                 // generated: the library `robodiff bench --keep` kept in this directory
 };
 
 const std::vector<std::string> kFunctions = {"rnea", "aba",      "crba", "gravity",  "nle",
@@ -199,7 +202,7 @@ SpecFunction functionFor(const ComputeOptions& o, const Model& model, FunctionSp
 }
 
 // What a generated evaluation says about the cache: "hit" (the library was in it), "built"
-// (built into it now), "off" (--no-cache); empty for the other backends.
+// (built into it now), "off" (--no-cache), "kept" (--kept); empty for the other backends.
 struct Evaluation {
   std::vector<Eigen::MatrixXd> outputs;
   std::string cache;
@@ -208,8 +211,11 @@ struct Evaluation {
 // f's outputs by `backend`; the generated library from the cache unless --no-cache.
 Evaluation evaluateBy(const ComputeOptions& o, const Model& model, const SpecFunction& f, Backend backend,
                       const std::vector<Eigen::VectorXd>& runtime) {
+  if (!o.kept.empty() && backend != Backend::Generated)
+    throw std::invalid_argument("--kept loads a compiled library: it needs --backend generated");
   if (backend != Backend::Generated) return {f.evaluate(backend, runtime), ""};
   if (o.no_cache) return {f.evaluate(backend, runtime), "off"};
+  if (!o.kept.empty()) return {evaluateKeptLibrary(model, f, o.kept, runtime), "kept"};
   CachedLibraryRequest request;
   request.cache_dir = cacheDirFor(o.cache_dir);
   request.compiler = o.compiler;
@@ -230,6 +236,7 @@ std::string backendLabel(Backend backend, const std::string& cache) {
   if (cache == "hit") label += ", from the cache";
   if (cache == "built") label += ", built into the cache";
   if (cache == "off") label += ", not cached";
+  if (cache == "kept") label += ", kept by robodiff bench";
   return label;
 }
 
@@ -345,6 +352,13 @@ void addComputeCommand(CLI::App& app) {
                 "--backend generated: compile into a temporary directory (removed afterwards) and leave the cache "
                 "alone: neither read nor written")
       ->excludes(cache);
+  cmd->add_option("--kept", options->kept,
+                  "--backend generated: load the library `robodiff bench --keep DIR` kept in DIR/<row> (its "
+                  "<row>.json, <row>.so and src/) instead of the cache's, when it is the one this spec and robot "
+                  "build (same normalised spec, same generated C: nothing is compiled); refused, named, otherwise")
+      ->type_name("DIR")
+      ->excludes(cache)
+      ->excludes("--no-cache");
   cmd->add_option("--compiler", options->compiler,
                   "C compiler of --backend generated, a path or a name in PATH (default: $CC, else cc)")
       ->type_name("CC");
@@ -361,7 +375,8 @@ void addComputeCommand(CLI::App& app) {
       "With --random-state SEED the JSON also has \"random_state\": the seed and the arrays drawn, by input name, "
       "so the same state can be given again with --state FILE.\n"
       "With --backend generated the JSON also has \"cache\": \"hit\" (the library was in the cache: nothing "
-      "compiled), \"built\" (built into the cache now; a later identical call is a hit) or \"off\" (--no-cache). "
+      "compiled), \"built\" (built into the cache now; a later identical call is a hit), \"off\" (--no-cache) or "
+      "\"kept\" (--kept). "
       "A cached library whose SHA-256 no longer matches the index is moved to the cache's quarantine and rebuilt, "
       "never loaded.");
   cmd->callback([options] { run(*options); });
