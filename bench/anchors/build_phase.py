@@ -3,15 +3,13 @@ every robot at once, several at a time (--build-jobs, default the machine's core
 that the rounds time with nothing else running and the run's wall time is not the sum of
 every build:
 
-- CppADCodeGen's and CasADi's libraries, one `anchors_bench --build-only` per library (each
-  built in a child process of its own that records its cold build time and the compiler's
-  peak memory; the rounds then load them with --reuse). The longest go first: every
-  robot's Jacobians, the robots with the most degrees of freedom first, then the values;
-- the libraries robodiff's checks load, built into the checks' cache by the same
-  `robodiff compute --backend generated` calls the checks make (at a random state), last:
-  their compiles use both cores.
+CppADCodeGen's and CasADi's libraries, one `anchors_bench --build-only` per library (each
+built in a child process of its own that records its cold build time and the compiler's
+peak memory; the rounds then load them with --reuse). The longest go first: every robot's
+Jacobians, the robots with the most degrees of freedom first, then the values.
 
-robodiff bench's own cold builds are not here: its first round measures them, alone."""
+robodiff's libraries are not here: robodiff bench's first round builds them, alone (its
+cold build figures), and keeps them for the second round and for the checks."""
 import concurrent.futures
 import json
 import os
@@ -53,15 +51,6 @@ def longest_first(jobs_by_size):
     return sorted(ordered, key=lambda job: job[0].endswith("_value"))  # stable
 
 
-def robodiff_check_job(robodiff, robot, cache, specs):
-    """One job: the `robodiff compute --backend generated --spec` calls that build every
-    library the checks load into their cache."""
-    os.makedirs(cache, mode=0o700, exist_ok=True)
-    base = [robodiff, "compute", "--urdf", robot.urdf, "--backend", "generated", "--cache", cache,
-            "--random-state", "1"] + base_flags(robot)
-    return (f"{robot.title}: robodiff's checks", [base + ["--spec", spec] for spec in specs])
-
-
 def run_job(job):
     label, commands = job
     t0 = time.monotonic()
@@ -83,6 +72,6 @@ def build_all(jobs, workers):
         for done in concurrent.futures.as_completed([pool.submit(run_job, job) for job in jobs]):
             label, seconds, problem = done.result()
             print(f"anchors:   {label}: {seconds:.1f} s{' ' + problem if problem else ''}", file=sys.stderr)
-            if problem and not label.endswith("robodiff's checks"):
+            if problem:
                 raise SystemExit(f"anchors: building {label} {problem}")
     print(f"anchors: the build phase took {(time.monotonic() - t0) / 60:.1f} min", file=sys.stderr)

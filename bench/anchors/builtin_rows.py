@@ -2,12 +2,14 @@
 for them, so they come in as the built-in function specs specs/crba_value.json and
 specs/frame_jacobian_value.json (`robodiff bench --spec`; the row is the file's stem), the
 frame Jacobian's frame being the anchors' (the model's last frame, LOCAL_WORLD_ALIGNED).
-Checked against Pinocchio's outputs through `robodiff compute --backend generated`.
+Checked against Pinocchio's outputs through `robodiff compute --backend generated` on the
+libraries robodiff bench kept (kept_compute.py).
 Fixed and floating base alike."""
 import json
 import os
 import subprocess
 
+import kept_compute
 import step_specs
 
 ROWS = ["crba_value", "frame_jacobian_value"]  # the table's rows, robodiff bench's rows, the specs' stems
@@ -23,8 +25,6 @@ def check_robodiff(robodiff, robot, anchors, work, rel_err, run):
     Pinocchio's (anchors_bench puts the matrix in its outputs' "jacobian") at the anchors'
     check states."""
     reference = {r["name"]: r["outputs"] for r in anchors["sides"]["pinocchio"]}
-    cache = os.path.join(work, "robodiff_cache")
-    os.makedirs(cache, mode=0o700, exist_ok=True)
     errors = {}
     for row in ROWS:
         err = 0.0
@@ -32,9 +32,7 @@ def check_robodiff(robodiff, robot, anchors, work, rel_err, run):
             path = os.path.join(work, f"q_state{k}.json")
             with open(path, "w") as f:
                 json.dump({"q": state["q"]}, f)
-            cmd = [robodiff, "compute", "--urdf", robot.urdf, "--spec", os.path.join(work, f"{row}.json"),
-                   "--backend", "generated", "--cache", cache, "--state", path]
-            cmd += ["--floating-base"] if robot.floating_base else []
+            cmd = kept_compute.command(robodiff, robot, os.path.join(work, f"{row}.json"), work, row, path)
             out = json.loads(run(cmd, stderr=subprocess.DEVNULL))
             err = max(err, rel_err(out["value"], reference[row][k]["jacobian"]))
         errors[row] = err

@@ -1,12 +1,12 @@
-"""bench/anchors driver: after a build phase that builds every robot's anchor libraries and
-the checks' libraries several at once (build_phase.py), for each robot alternately runs
+"""bench/anchors driver: after a build phase that builds every robot's anchor libraries
+several at once (build_phase.py), for each robot alternately runs
 anchors_bench (Pinocchio, CppADCodeGen and CasADi, the step rows of Pinocchio and
 crocoddyl, and of the generated sides on a fixed base) and `robodiff bench --json` (with
 the CRBA and frame-Jacobian specs, builtin_rows.py, and the step rows' specs,
 step_specs.py; all in specs/), two rounds, keeps
 the minimum per cell, checks robodiff's values and derivatives (`robodiff compute
---backend generated`) against Pinocchio's at the anchors' check states, and prints one
-table per robot.
+--backend generated --kept`: the libraries robodiff bench timed, kept_compute.py) against
+Pinocchio's at the anchors' check states, and prints one table per robot.
 
 Run through bench/anchors/run (it builds anchors_bench and passes the paths)."""
 import argparse
@@ -24,6 +24,7 @@ import report  # noqa: E402
 import robots  # noqa: E402
 import step_specs  # noqa: E402
 import builtin_rows  # noqa: E402
+import kept_compute  # noqa: E402
 import mujoco_side  # noqa: E402
 
 LIMIT = 1e-9  # relative error (scaled by max(1, |reference|)) a side may have
@@ -150,8 +151,6 @@ def check_robodiff(args, robot, anchors, work):
     """robodiff's generated libraries at the anchors' check states against Pinocchio's
     outputs; returns {row: max relative error}."""
     reference = {r["name"]: r["outputs"] for r in anchors["sides"]["pinocchio"]}
-    cache = os.path.join(work, "robodiff_cache")
-    os.makedirs(cache, mode=0o700, exist_ok=True)
     errors = {}
     for row, spec in write_check_specs(work).items():
         derivatives = CHECKED_ROWS[row][1] is not None
@@ -160,9 +159,7 @@ def check_robodiff(args, robot, anchors, work):
             path = os.path.join(work, f"state{k}.json")
             with open(path, "w") as f:
                 json.dump(state, f)
-            cmd = [args.robodiff, "compute", "--urdf", robot.urdf, "--spec", spec, "--backend", "generated",
-                   "--cache", cache, "--state", path]
-            cmd += ["--floating-base"] if robot.floating_base else []
+            cmd = kept_compute.command(args.robodiff, robot, spec, work, row, path)
             cmd += ["--derivatives"] if derivatives else []
             out = json.loads(run(cmd, stderr=subprocess.DEVNULL))
             ref = reference[row][k]
@@ -175,7 +172,7 @@ def check_robodiff(args, robot, anchors, work):
 
 class Prepared:
     """A robot's work folder, the --spec files of its robodiff bench rounds (CRBA, frame J
-    and the step rows; the frame: the anchors' last) and its build jobs."""
+    and the step rows; the frame: the anchors' last) and its anchors' build jobs."""
 
     def __init__(self, args, robot):
         self.robot, self.work = robot, os.path.join(args.work, robot.key)
@@ -184,18 +181,12 @@ class Prepared:
         self.nv = generated["nv"]
         self.specs = builtin_rows.write_specs(generated["frame"], self.work) + \
             step_specs.write_specs(generated["frame"], self.work)
-        checked_specs = self.specs + [step_specs.value_only_spec(self.work, name) for name in step_specs.SPECS]
-        checked_specs += list(write_check_specs(self.work).values())
         self.anchor_jobs = build_phase.anchor_jobs(args, robot, self.work, generated)
-        self.check_job = build_phase.robodiff_check_job(args.robodiff, robot, os.path.join(self.work, "robodiff_cache"),
-                                                        checked_specs)
 
 
 def build_everything(args, prepared):
-    """The build phase of every robot at once: the anchors' libraries, longest first, then
-    robodiff's checks (their compiles use both cores)."""
-    jobs = build_phase.longest_first([(p.nv, p.anchor_jobs) for p in prepared])
-    build_phase.build_all(jobs + [p.check_job for p in prepared], args.build_jobs)
+    """The build phase of every robot at once: the anchors' libraries, longest first."""
+    build_phase.build_all(build_phase.longest_first([(p.nv, p.anchor_jobs) for p in prepared]), args.build_jobs)
 
 
 def record_checks(args, robot, first, work, result):

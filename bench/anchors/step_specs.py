@@ -1,12 +1,15 @@
 """The step rows on robodiff's side: the user-function specs of specs/ (euler_step.json,
 step_cost.json) with the robot's frame filled in, the names `robodiff bench --spec` gives
 their rows, and the check of robodiff's outputs against Pinocchio's (anchors_bench's
-step rows) through `robodiff compute --backend generated`."""
+step rows) through `robodiff compute --backend generated` on the libraries robodiff bench
+kept (kept_compute.py)."""
 import json
 import os
 import subprocess
 
 import numpy as np
+
+import kept_compute
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SPECS = ["euler_step", "step_cost"]
@@ -72,8 +75,6 @@ def check_robodiff(robodiff, robot, anchors, work, rel_err, run):
     step's Jacobian, the cost's gradient), and the error of its exact Hessian against
     central differences of Pinocchio's gradient."""
     reference = {r["name"]: r["outputs"] for r in anchors["sides"]["pinocchio"]}
-    cache = os.path.join(work, "robodiff_cache")
-    os.makedirs(cache, mode=0o700, exist_ok=True)
     specs = {"euler_step_value": value_only_spec(work, "euler_step"),
              "euler_step_jacobian": os.path.join(work, "euler_step.json"),
              "step_cost_value": value_only_spec(work, "step_cost"),
@@ -85,9 +86,7 @@ def check_robodiff(robodiff, robot, anchors, work, rel_err, run):
             path = os.path.join(work, f"step_state{k}.json")
             with open(path, "w") as f:
                 json.dump({"q": state["q"], "v": state["v"], "u": state["tau"]}, f)
-            cmd = [robodiff, "compute", "--urdf", robot.urdf, "--spec", spec, "--backend", "generated",
-                   "--cache", cache, "--state", path]
-            cmd += ["--floating-base"] if robot.floating_base else []
+            cmd = kept_compute.command(robodiff, robot, spec, work, BENCH_ROWS[row], path)
             out = step_outputs(json.loads(run(cmd, stderr=subprocess.DEVNULL)), row.startswith("step_cost"))
             ref = reference[row][k]
             for key in ("value", "jacobian", "gradient"):
