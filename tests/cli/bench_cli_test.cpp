@@ -223,6 +223,18 @@ TEST(BenchCli, NoBatchBuildsTheSingleKnotCodeAlone) {
   EXPECT_LE(nlohmann::json::parse(r.out).at("checks").at("batch_vs_single_aba_jacobian").get<double>(), 1e-12);
 }
 
+// The blocks of two compute outputs agree to 1e-10 (relative, or absolute below 1).
+void expectSameNumbers(const nlohmann::json& a, const nlohmann::json& b, std::initializer_list<const char*> blocks) {
+  for (const char* block : blocks) {
+    const nlohmann::json x = a.at(block).flatten(), y = b.at(block).flatten();
+    ASSERT_EQ(x.size(), y.size()) << block;
+    for (auto it = x.begin(); it != x.end(); ++it) {
+      const double expected = y.at(it.key()).get<double>();
+      EXPECT_NEAR(it->get<double>(), expected, 1e-10 * (1 + std::abs(expected))) << block << it.key();
+    }
+  }
+}
+
 // `compute --backend generated --kept DIR/<row>` evaluates the library bench kept (what it
 // timed) when it is this spec's and robot's, with the reference backend's numbers; a spec
 // that builds another library, a directory with no kept library and another backend are
@@ -247,13 +259,7 @@ TEST(BenchCli, ComputeLoadsAKeptLibraryOnlyWhenItIsTheSpecs) {
   r = runCommand(step_compute + "interpreted");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json step_interpreted = nlohmann::json::parse(r.out);
-  for (const char* block : {"v_next", "dv"}) {
-    const auto a = step_kept.at(block).flatten(), b = step_interpreted.at(block).flatten();
-    ASSERT_EQ(a.size(), b.size()) << block;
-    for (auto it = a.begin(); it != a.end(); ++it)
-      EXPECT_NEAR(it->get<double>(), b.at(it.key()).get<double>(), 1e-10 * (1 + std::abs(b.at(it.key()).get<double>())))
-          << block << it.key();
-  }
+  expectSameNumbers(step_kept, step_interpreted, {"v_next", "dv"});
   const fs::path spec = chain.dir() / "rnea_jacobian.json", batched = chain.dir() / "batched.json";
   std::ofstream(spec) << R"({"function": "rnea", "outputs": [{"kind": "value"},
     {"kind": "jacobian", "wrt": ["q", "v", "a"]}], "build": {"batch": false}})";
@@ -269,13 +275,7 @@ TEST(BenchCli, ComputeLoadsAKeptLibraryOnlyWhenItIsTheSpecs) {
   r = runCommand(compute + shellQuote(spec.string()) + " --backend reference");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json reference = nlohmann::json::parse(r.out);
-  for (const char* block : {"value", "jacobian"}) {
-    const auto a = from_kept.at(block).flatten(), b = reference.at(block).flatten();
-    ASSERT_EQ(a.size(), b.size()) << block;
-    for (auto it = a.begin(); it != a.end(); ++it)
-      EXPECT_NEAR(it->get<double>(), b.at(it.key()).get<double>(), 1e-10 * (1 + std::abs(b.at(it.key()).get<double>())))
-          << block << it.key();
-  }
+  expectSameNumbers(from_kept, reference, {"value", "jacobian"});
   r = runCommand(compute + shellQuote(batched.string()) + kept);  // the batched build is another library
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("is not the library this spec and robot build"), std::string::npos) << r.err;

@@ -7,6 +7,7 @@
 #include "options/cache_location.hpp"
 #include "robodiff/cache/prepared_build.hpp"
 #include "robodiff/functions/evaluation.hpp"
+#include "robodiff/functions/spec_check.hpp"
 #include "robodiff/model/canonical.hpp"
 #include "robodiff/runtime/cached_function.hpp"
 #include "robodiff/workers/cached_builder.hpp"
@@ -87,11 +88,7 @@ CachedLibrary CachedLibrary::open(const Model& model, const SpecFunction& f, con
 
 std::vector<Eigen::MatrixXd> CachedLibrary::evaluate(const SpecFunction& f,
                                                      const std::vector<Eigen::VectorXd>& runtime) const {
-  const std::vector<Eigen::VectorXd> blocks = evaluateBlocks(function_, f.definition(), runtime);
-  std::vector<Eigen::MatrixXd> out;
-  for (std::size_t k = 0; k < blocks.size(); ++k)
-    out.push_back(blockMatrix(f.definition().outputs[k], blocks[k], f.spec().outputs[k].kind == OutputKind::Hessian));
-  return out;
+  return specBlockMatrices(f.spec(), f.built(), evaluateBlocks(function_, f.definition(), runtime));
 }
 
 }  // namespace robodiff::cli

@@ -5,6 +5,7 @@
 #include "commands/bench_kept_library.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/functions/evaluation.hpp"
+#include "robodiff/functions/spec_check.hpp"
 
 namespace robodiff::cli {
 namespace {
@@ -39,11 +40,7 @@ std::vector<Eigen::MatrixXd> evaluateKeptLibrary(const Model& model, const SpecF
                                 "or generator version, or a changed source)");
   const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(kept->library);
   const codegen::CompiledFunction function = library.function(options.builder.name);
-  const std::vector<Eigen::VectorXd> blocks = evaluateBlocks(function, f.definition(), runtime);
-  std::vector<Eigen::MatrixXd> out;
-  for (std::size_t k = 0; k < blocks.size(); ++k)
-    out.push_back(blockMatrix(f.definition().outputs[k], blocks[k], f.spec().outputs[k].kind == OutputKind::Hessian));
-  return out;
+  return specBlockMatrices(f.spec(), f.built(), evaluateBlocks(function, f.definition(), runtime));
 }
 
 }  // namespace robodiff::cli
