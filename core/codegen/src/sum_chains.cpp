@@ -114,27 +114,32 @@ class SumChainer {
     std::vector<NodeId> interiors;
     for (NodeId root = 0; root < g_.size(); ++root) {
       if (!needed_[root] || !isSum(g_.node(root).op) || interior(root)) continue;
-      tree.clear();
-      interiors.clear();
-      std::vector<Term> stack{{root, root, root, false}};
-      while (!stack.empty()) {
-        const Term t = stack.back();
-        stack.pop_back();
-        const Node& n = g_.node(t.node);
-        if (t.node == root || interior(t.node)) {
-          if (t.node != root) interiors.push_back(t.node);
-          stack.push_back({n.args[1], root, t.node, n.op == Op::Sub ? !t.negated : t.negated});
-          stack.push_back({n.args[0], root, t.node, t.negated});
-        } else {
-          tree.push_back(t);
-        }
-      }
-      std::stable_sort(tree.begin(), tree.end(), [](const Term& a, const Term& b) { return a.at < b.at; });
+      walkTree(root, tree, interiors);
       if (interiors.empty() || !chainFitsSlack(root, tree)) continue;  // a single sum, or on the critical path
       for (NodeId id : interiors) absorbed_[id] = 1;
       terms_.insert(terms_.end(), tree.begin(), tree.end());
     }
     std::stable_sort(terms_.begin(), terms_.end(), [](const Term& a, const Term& b) { return a.at < b.at; });
+  }
+
+  // The terms of the tree under `root` (sorted by the sum that reads each) and its interior sums.
+  void walkTree(NodeId root, std::vector<Term>& tree, std::vector<NodeId>& interiors) const {
+    tree.clear();
+    interiors.clear();
+    std::vector<Term> stack{{root, root, root, false}};
+    while (!stack.empty()) {
+      const Term t = stack.back();
+      stack.pop_back();
+      const Node& n = g_.node(t.node);
+      if (t.node != root && !interior(t.node)) {
+        tree.push_back(t);
+        continue;
+      }
+      if (t.node != root) interiors.push_back(t.node);
+      stack.push_back({n.args[1], root, t.node, n.op == Op::Sub ? !t.negated : t.negated});
+      stack.push_back({n.args[0], root, t.node, t.negated});
+    }
+    std::stable_sort(tree.begin(), tree.end(), [](const Term& a, const Term& b) { return a.at < b.at; });
   }
 
   // A chain is longer than a tree (one add after another): it is used only where its end
