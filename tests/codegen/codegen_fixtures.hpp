@@ -65,4 +65,10 @@ bool haveProgram(const std::string& program);
 // The number of times `needle` occurs in `text`.
 std::size_t countOf(const std::string& text, const std::string& needle);
 
+// Whether /proc/cpuinfo lists the CPU flag `flag` ("avx512f", "fma").
+bool cpuHasFlag(const std::string& flag);
+
+// The disassembly of function `symbol` in `library` (objdump -d); empty when it is not there.
+std::string disassembly(const std::filesystem::path& library, const std::string& symbol);
+
 }  // namespace robodiff::codegen::testing

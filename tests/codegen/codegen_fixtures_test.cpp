@@ -7,7 +7,12 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <fstream>
+#include <sstream>
+
 #include <gtest/gtest.h>
+
+#include "support/process.hpp"
 
 namespace robodiff::codegen::testing {
 
@@ -275,6 +280,20 @@ std::size_t countOf(const std::string& text, const std::string& needle) {
   std::size_t n = 0;
   for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
   return n;
+}
+
+bool cpuHasFlag(const std::string& flag) {
+  std::ifstream in("/proc/cpuinfo");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str().find(" " + flag) != std::string::npos;
+}
+
+std::string disassembly(const std::filesystem::path& library, const std::string& symbol) {
+  const std::string all = robodiff::testing::runCommand("objdump -d --no-show-raw-insn " + library.string()).out;
+  const auto begin = all.find("<" + symbol + ">:\n");
+  if (begin == std::string::npos) return {};
+  return all.substr(begin, all.find("\n\n", begin) - begin);
 }
 
 TEST(CodegenFixtures, RandomFunctionsUseEveryOpAndStayFinite) {

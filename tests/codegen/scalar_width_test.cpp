@@ -2,9 +2,6 @@
 // gcc otherwise packs independent stores into 512-bit registers, measured 25% slower per
 // call (docs/code-generation.md); the batched code keeps the full width. Checked on the
 // compiled library's disassembly, against the same source with the attribute taken out.
-#include <fstream>
-#include <sstream>
-
 #include <gtest/gtest.h>
 
 #include "codegen_fixtures.hpp"
@@ -17,25 +14,8 @@ namespace robodiff::codegen {
 namespace {
 
 using namespace testing;
-using robodiff::testing::ProcessResult;
 using robodiff::testing::runCommand;
 using robodiff::testing::TempDir;
-
-bool cpuHasAvx512() {
-  std::ifstream in("/proc/cpuinfo");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str().find(" avx512f") != std::string::npos;
-}
-
-// The disassembly of function `symbol` in `library` (objdump -d).
-std::string disassembly(const std::filesystem::path& library, const std::string& symbol) {
-  const ProcessResult r = runCommand("objdump -d --no-show-raw-insn " + library.string());
-  const std::string header = "<" + symbol + ">:\n";
-  const auto begin = r.out.find(header);
-  if (begin == std::string::npos) return {};
-  return r.out.substr(begin, r.out.find("\n\n", begin) - begin);
-}
 
 std::filesystem::path compiled(const GeneratedLibrary& lib, const std::filesystem::path& out) {
   CompilerOptions options;
@@ -45,7 +25,7 @@ std::filesystem::path compiled(const GeneratedLibrary& lib, const std::filesyste
 }
 
 TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot) {
-  if (!cpuHasAvx512()) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
+  if (!cpuHasFlag("avx512f")) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
   if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
   Graph g;
   FunctionDefinition f = chainFunction(g, "fk", 12);
@@ -85,8 +65,8 @@ TEST(ScalarWidth, AFewHundredStructuralZerosAreStoredWithoutMemset) {
   ASSERT_FALSE(eval.empty()) << "no rd_banded_eval in " << library;
   EXPECT_EQ(eval.find("memset"), std::string::npos) << eval;
   EXPECT_EQ(eval.find("rep stos"), std::string::npos) << eval;
-  if (cpuHasAvx512()) EXPECT_EQ(eval.find("zmm"), std::string::npos) << eval;
-  if (cpuHasAvx512()) EXPECT_NE(eval.find("ymm"), std::string::npos) << "no longer four zeros a store";
+  if (cpuHasFlag("avx512f")) EXPECT_EQ(eval.find("zmm"), std::string::npos) << eval;
+  if (cpuHasFlag("avx512f")) EXPECT_NE(eval.find("ymm"), std::string::npos) << "no longer four zeros a store";
 }
 
 }  // namespace

@@ -2,9 +2,6 @@
 // critical path is generated as one running sum, so gcc fuses every product but the
 // first into a multiply-add; the values stay those of the tree up to rounding, and no
 // operation is added.
-#include <fstream>
-#include <sstream>
-
 #include <gtest/gtest.h>
 
 #include "codegen_fixtures.hpp"
@@ -13,29 +10,13 @@
 #include "robodiff/codegen/interpreter.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/symbolic/cone.hpp"
-#include "support/process.hpp"
 #include "support/temp_dir.hpp"
 
 namespace robodiff::codegen {
 namespace {
 
 using namespace testing;
-using robodiff::testing::runCommand;
 using robodiff::testing::TempDir;
-
-bool cpuHasFma() {
-  std::ifstream in("/proc/cpuinfo");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str().find(" fma") != std::string::npos;
-}
-
-std::string disassemblyOf(const std::filesystem::path& library, const std::string& symbol) {
-  const std::string all = runCommand("objdump -d --no-show-raw-insn " + library.string()).out;
-  const auto begin = all.find("<" + symbol + ">:\n");
-  if (begin == std::string::npos) return {};
-  return all.substr(begin, all.find("\n\n", begin) - begin);
-}
 
 // y0 = (x0 x1 + x2 x3) + (x4 x5 + x6 x7), y1 = x8 - (x0 x4 - (x9 + x1 x5)) + s, where s =
 // x2 + x3 is also an output (read twice: it stays one value, a term of y1's chain).
@@ -73,11 +54,11 @@ std::string sumOfFourProducts(bool beside_a_longer_path) {
   CodegenOptions options;
   options.split_threshold = 1u << 30;  // one part: rd_sums_eval
   TempDir dir;
-  return disassemblyOf(compiledWithGcc(generateLibrary(g, {f}, options), dir / "sums.so"), "rd_sums_eval");
+  return disassembly(compiledWithGcc(generateLibrary(g, {f}, options), dir / "sums.so"), "rd_sums_eval");
 }
 
 TEST(SumChains, ASumOfFourProductsOffTheCriticalPathIsOneMultiplyAndThreeFusedAdds) {
-  if (!cpuHasFma()) GTEST_SKIP() << "this CPU has no FMA: nothing to fuse";
+  if (!cpuHasFlag("fma")) GTEST_SKIP() << "this CPU has no FMA: nothing to fuse";
   if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
   const std::string eval = sumOfFourProducts(true);
   ASSERT_FALSE(eval.empty());
@@ -90,7 +71,7 @@ TEST(SumChains, ASumOfFourProductsOffTheCriticalPathIsOneMultiplyAndThreeFusedAd
 // A chain is longer than a tree: where the sum is the function's critical path (a small
 // serial algorithm's, say), it stays a tree.
 TEST(SumChains, ASumOnTheCriticalPathStaysATree) {
-  if (!cpuHasFma()) GTEST_SKIP() << "this CPU has no FMA: nothing to fuse";
+  if (!cpuHasFlag("fma")) GTEST_SKIP() << "this CPU has no FMA: nothing to fuse";
   if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
   const std::string eval = sumOfFourProducts(false);
   ASSERT_FALSE(eval.empty());

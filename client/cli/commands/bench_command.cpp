@@ -9,7 +9,7 @@
 // the targets get PASS or MISS. `--spec FILE` adds a function of the user's
 // own (bench_fixtures.hpp, userBenchSpecs): built, timed and checked against the
 // interpreter like the rest. `--keep DIR --reuse` times again what an earlier run kept
-// (bench_kept_library.hpp), without building.
+// (options/kept_library.hpp), without building.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -18,9 +18,9 @@
 #include <optional>
 
 #include "commands/bench_fixtures.hpp"
-#include "commands/bench_kept_library.hpp"
 #include "commands/bench_timing.hpp"
 #include "commands/commands.hpp"
+#include "options/kept_library.hpp"
 #include "output/bench_report.hpp"
 #include "robodiff/codegen/interpreter.hpp"
 #include "robodiff/functions/evaluation.hpp"
