@@ -58,12 +58,13 @@ class SumChainer {
  private:
   // Uses by the needed nodes and the outputs; for a node used once, its user's op.
   void countUses() {
-    for (const OutputBlock& b : f_.outputs) outputs_.insert(outputs_.end(), b.values.begin(), b.values.end());
-    needed_ = symbolic::coneMask(g_, outputs_);
+    std::vector<NodeId> outputs;
+    for (const OutputBlock& b : f_.outputs) outputs.insert(outputs.end(), b.values.begin(), b.values.end());
+    needed_ = symbolic::coneMask(g_, outputs);
     needed_.resize(g_.size(), 0);
     uses_.assign(g_.size(), 0);
     user_op_.assign(g_.size(), Op::Constant);
-    for (NodeId v : outputs_) ++uses_[v];
+    for (NodeId v : outputs) ++uses_[v];
     for (NodeId id = 0; id < g_.size(); ++id) {
       if (!needed_[id]) continue;
       const Node& n = g_.node(id);
@@ -169,7 +170,6 @@ class SumChainer {
 
   const Graph& g_;
   const FunctionDefinition& f_;
-  std::vector<NodeId> outputs_;
   std::vector<char> needed_, absorbed_;
   std::vector<std::uint32_t> uses_, earliest_, latest_;
   std::vector<Op> user_op_;
