@@ -12,9 +12,12 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
 #include <future>
+#include <sstream>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -115,21 +118,33 @@ TEST(CachedBuilder, ACachedEntryWhoseLibraryIsGoneIsQuarantinedAndBuiltAgain) {
   EXPECT_EQ(cache.stats().quarantined, 1u);
 }
 
+// The pids the compiler script appended to `log`, one a line; a line still being written is left out.
+// (A job's translation units compile two at once, so the script must append, never truncate.)
+std::vector<pid_t> compilerPids(const fs::path& log) {
+  std::vector<pid_t> pids;
+  std::istringstream lines(fs::exists(log) ? testing::readFile(log) : std::string());
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (lines.eof() || line.empty()) break;  // no newline yet: incomplete
+    pids.push_back(static_cast<pid_t>(std::strtol(line.c_str(), nullptr, 10)));
+  }
+  return pids;
+}
+
 TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   TempDir tmp;
   cache::Cache cache = cache::Cache::open(tmp / "cache");
   WorkerPool pool(poolOptions());
-  const fs::path pid_file = tmp / "compiler.pid";
+  const fs::path pid_log = tmp / "compilers.pid";
   CachedBuilderOptions options;
-  options.compiler = compilerScript(tmp, "slow-cc", "echo $$ > " + pid_file.string() + "\nexec sleep 60\n");
+  options.compiler = compilerScript(tmp, "slow-cc", "echo $$ >> " + pid_log.string() + "\nexec sleep 60\n");
   options.worker_death_backoff = {};  // no retry: the one death fails the build
   CachedBuilder builder(cache, pool, options);
   const std::vector<BuildTarget> targets = {{arm7(), false, fastSpec(tmp, "rnea_jacobian"), ""}};
 
   auto running = std::async(std::launch::async, [&] { return builder.buildAll(targets); });
-  ASSERT_TRUE(testing::waitFor([&] { return fs::exists(pid_file) && fs::file_size(pid_file) > 0; }, std::chrono::seconds(60)))
+  ASSERT_TRUE(testing::waitFor([&] { return !compilerPids(pid_log).empty(); }, std::chrono::seconds(60)))
       << "the compiler never started";
-  const pid_t compiler = std::stoi(testing::readFile(pid_file));
   const pid_t worker = pool.workers().at(0).pid;
   ASSERT_GT(worker, 0);
   ASSERT_EQ(::kill(worker, SIGKILL), 0);
@@ -143,8 +158,9 @@ TEST(CachedBuilder, AWorkerKilledMidCompileFailsOnlyItsJobAndLeavesNothing) {
   EXPECT_FALSE(fs::exists(tmp / "cache" / "objects" / result[0].key.substr(0, 2) / result[0].key));
   EXPECT_EQ(filesUnder(tmp / "cache" / "objects"), 0u);
   EXPECT_EQ(filesUnder(tmp / "cache" / "staging"), 0u);
-  EXPECT_TRUE(testing::waitFor([&] { return testing::processIsDead(compiler); }, std::chrono::seconds(10)))
-      << "compiler " << compiler << " outlived its worker";
+  for (const pid_t compiler : compilerPids(pid_log))
+    EXPECT_TRUE(testing::waitFor([&] { return testing::processIsDead(compiler); }, std::chrono::seconds(10)))
+        << "compiler " << compiler << " outlived its worker";
 
   // The pool replaced the worker; the same key builds with a working compiler.
   EXPECT_TRUE(testing::waitFor([&] { return pool.workers().at(0).pid != worker && pool.workers().at(0).pid > 0; },
