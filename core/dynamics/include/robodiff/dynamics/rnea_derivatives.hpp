@@ -88,24 +88,29 @@ template <class S> CoriolisComposite<S> bodyCoriolis(const InertiaSum<S>& I, con
 
 }  // namespace detail
 
-// The three nv x nv partials of rnea(model, data, q, v, a), and tau itself in data.tau
-// from the same sweep (tau_c = S_c . F_J, F_J the world-frame force on J's subtree), so a
-// caller wanting value and derivatives needs no second RNEA.
-template <class S, class Q, class V, class A>
-void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
-                            const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a, MatX<S>& dtau_dq,
-                            MatX<S>& dtau_dv, MatX<S>& dtau_da) {
-  using detail::pair;
-  const int n = model.njoints(), nv = model.nv;
-  std::vector<Motion<S>> ov(n), oa(n);
-  std::vector<Force<S>> oF(n);  // forces, then their subtree sums
-  std::vector<InertiaSum<S>> oY(n);
-  std::vector<detail::CoriolisComposite<S>> oB(n);
-  const Motion<S> a0 = gravityAcceleration<S>(model);
-  auto column = [&](int c) { return Motion<S>::fromVector(data.J.col(c)); };
+namespace detail {
 
-  // Forward: world-frame placements, subspace columns, velocities, accelerations, and
-  // each body's force, inertia and B matrix.
+// The world-frame sweep's per-joint quantities: after worldForwardSweep, each body's own
+// velocity, acceleration, force, inertia and B; after sumOverSubtrees, oF, oY and oB hold
+// the sums over each joint's subtree.
+template <class S> struct WorldSweep {
+  std::vector<Motion<S>> ov, oa;
+  std::vector<Force<S>> oF;
+  std::vector<InertiaSum<S>> oY;
+  std::vector<CoriolisComposite<S>> oB;
+};
+
+template <class S> Motion<S> subspaceColumn(const Data<S>& data, int c) { return Motion<S>::fromVector(data.J.col(c)); }
+
+// Forward: world-frame placements (data.oMi), subspace columns (data.J), velocities,
+// accelerations, and each body's force, inertia and B matrix.
+template <class S, class Q, class V, class A>
+WorldSweep<S> worldForwardSweep(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
+                                const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a) {
+  const int n = model.njoints();
+  WorldSweep<S> w{std::vector<Motion<S>>(n), std::vector<Motion<S>>(n), std::vector<Force<S>>(n),
+                  std::vector<InertiaSum<S>>(n), std::vector<CoriolisComposite<S>>(n)};
+  const Motion<S> a0 = gravityAcceleration<S>(model);
   for (int j = 0; j < n; ++j) {
     const Joint& joint = model.joints[j];
     data.liMi[j] = jointPlacement<S>(joint, q);
@@ -114,64 +119,82 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
     for (int k = 0; k < joint.nv; ++k) {
       const int c = joint.idx_v + k;
       data.J.col(c) = worldSubspaceColumn(joint, data.oMi[j], k);
-      const Motion<S> s = column(c);
+      const Motion<S> s = subspaceColumn(data, c);
       vrel += Motion<S>{s.linear * v[c], s.angular * v[c]};
       arel += Motion<S>{s.linear * a[c], s.angular * a[c]};
     }
-    const Motion<S> vp = joint.parent >= 0 ? ov[joint.parent] : Motion<S>::Zero();
-    const Motion<S> ap = joint.parent >= 0 ? oa[joint.parent] : a0;
-    ov[j] = vp + vrel;
-    oa[j] = ap + arel + ov[j].cross(vrel);
-    oY[j] = worldInertia(model.bodies[j], data.oMi[j]);
-    const Force<S> h = oY[j] * ov[j];
-    oF[j] = oY[j] * oa[j] + ov[j].cross(h);
-    oB[j] = detail::bodyCoriolis(oY[j], ov[j], h);
+    const Motion<S> vp = joint.parent >= 0 ? w.ov[joint.parent] : Motion<S>::Zero();
+    const Motion<S> ap = joint.parent >= 0 ? w.oa[joint.parent] : a0;
+    w.ov[j] = vp + vrel;
+    w.oa[j] = ap + arel + w.ov[j].cross(vrel);
+    w.oY[j] = worldInertia(model.bodies[j], data.oMi[j]);
+    const Force<S> h = w.oY[j] * w.ov[j];
+    w.oF[j] = w.oY[j] * w.oa[j] + w.ov[j].cross(h);
+    w.oB[j] = bodyCoriolis(w.oY[j], w.ov[j], h);
   }
-  // Backward: composites over subtrees.
-  for (int j = n - 1; j > 0; --j) {
+  return w;
+}
+
+// Backward: forces, inertias and B summed over subtrees.
+template <class S> void sumOverSubtrees(const Model& model, WorldSweep<S>& w) {
+  for (int j = model.njoints() - 1; j > 0; --j) {
     const int p = model.joints[j].parent;
     if (p < 0) continue;
-    oY[p] += oY[j];
-    oF[p] += oF[j];
-    oB[p] += oB[j];
+    w.oY[p] += w.oY[j];
+    w.oF[p] += w.oF[j];
+    w.oB[p] += w.oB[j];
   }
-  data.tau.resize(nv);
-  for (int j = 0; j < n; ++j)
+}
+
+// tau_c = S_c . F_J for every velocity coordinate c (J: c's joint), from the subtree sums.
+template <class S> VecX<S> jointTorques(const Model& model, const Data<S>& data, const WorldSweep<S>& w) {
+  VecX<S> tau(model.nv);
+  for (int j = 0; j < model.njoints(); ++j)
     for (int k = 0; k < model.joints[j].nv; ++k) {
       const int c = model.joints[j].idx_v + k;
-      data.tau[c] = pair(column(c), oF[j]);
+      tau[c] = pair(subspaceColumn(data, c), w.oF[j]);
     }
+  return tau;
+}
+
+// The partials from the subtree sums (the formulas at the top of this file).
+template <class S>
+void rneaPartialsFromSweep(const Model& model, const Data<S>& data, const WorldSweep<S>& w, MatX<S>& dtau_dq,
+                           MatX<S>& dtau_dv, MatX<S>& dtau_da) {
+  const int n = model.njoints(), nv = model.nv;
+  const Motion<S> a0 = gravityAcceleration<S>(model);
+  auto column = [&](int c) { return subspaceColumn(data, c); };
   // Per row i: P_i = Y_i S_i and Q_i = B_i^T S_i (B_i, Y_i: composites of i's joint).
   std::vector<Force<S>> P(nv), Qf(nv);
   for (int j = 0; j < n; ++j)
     for (int k = 0; k < model.joints[j].nv; ++k) {
       const int i = model.joints[j].idx_v + k;
-      P[i] = oY[j] * column(i);
-      Qf[i] = oB[j].transposeTimes(column(i));
+      P[i] = w.oY[j] * column(i);
+      Qf[i] = w.oB[j].transposeTimes(column(i));
     }
   dtau_dq = MatX<S>::Zero(nv, nv);
   dtau_dv = MatX<S>::Zero(nv, nv);
   dtau_da = MatX<S>::Zero(nv, nv);
   for (int J = 0; J < n; ++J) {
     const Joint& joint = model.joints[J];
-    const Motion<S> vp = joint.parent >= 0 ? ov[joint.parent] : Motion<S>::Zero();
-    const Motion<S> ap = joint.parent >= 0 ? oa[joint.parent] : a0;
+    const Motion<S> vp = joint.parent >= 0 ? w.ov[joint.parent] : Motion<S>::Zero();
+    const Motion<S> ap = joint.parent >= 0 ? w.oa[joint.parent] : a0;
     const int end = model.subtree_end[J] < n ? model.joints[model.subtree_end[J]].idx_v : nv;
     for (int k = 0; k < joint.nv; ++k) {
       const int c = joint.idx_v + k;
       const Motion<S> s = column(c);
-      const Motion<S> w = s.cross(vp);
-      const Motion<S> xi = s.cross(ap) - w.cross(vp);
-      const Motion<S> zeta = joint.nv == 1 ? w + w : s.cross(vp + ov[J]);
+      const Motion<S> wc = s.cross(vp);
+      const Motion<S> xi = s.cross(ap) - wc.cross(vp);
+      const Motion<S> zeta = joint.nv == 1 ? wc + wc : s.cross(vp + w.ov[J]);
       for (int i = joint.idx_v; i < end; ++i) {
-        dtau_dq(i, c) = -pair(xi, P[i]) - pair(w, Qf[i]);
+        dtau_dq(i, c) = -pair(xi, P[i]) - pair(wc, Qf[i]);
         dtau_dv(i, c) = pair(s, Qf[i]) - pair(zeta, P[i]);
         dtau_da(i, c) = pair(s, P[i]);
       }
       if (joint.parent < 0) continue;
-      const Force<S> G = s.cross(oF[J]) - oY[J] * xi - oB[J].times(w);
-      const Force<S> H = oB[J].times(s) - oY[J] * zeta;
-      const Force<S> YS = oY[J] * s;
+      const Force<S> G = s.cross(w.oF[J]) - w.oY[J] * xi - w.oB[J].times(wc);
+      const Force<S> H = w.oB[J].times(s) - w.oY[J] * zeta;
+      const Force<S> YS = w.oY[J] * s;
       for (int r_joint = joint.parent; r_joint >= 0; r_joint = model.joints[r_joint].parent)
         for (int kr = 0; kr < model.joints[r_joint].nv; ++kr) {
           const int r = model.joints[r_joint].idx_v + kr;
@@ -182,6 +205,21 @@ void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::Matr
         }
     }
   }
+}
+
+}  // namespace detail
+
+// The three nv x nv partials of rnea(model, data, q, v, a), and tau itself in data.tau
+// from the same sweep (tau_c = S_c . F_J, F_J the world-frame force on J's subtree), so a
+// caller wanting value and derivatives needs no second RNEA.
+template <class S, class Q, class V, class A>
+void computeRneaDerivatives(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
+                            const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<A>& a, MatX<S>& dtau_dq,
+                            MatX<S>& dtau_dv, MatX<S>& dtau_da) {
+  detail::WorldSweep<S> w = detail::worldForwardSweep(model, data, q, v, a);
+  detail::sumOverSubtrees(model, w);
+  data.tau = detail::jointTorques(model, data, w);
+  detail::rneaPartialsFromSweep(model, data, w, dtau_dq, dtau_dv, dtau_da);
 }
 
 }  // namespace robodiff
