@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "robodiff/dynamics/aba_derivatives.hpp"
 #include "robodiff/dynamics/minv.hpp"
 #include "robodiff/dynamics/rnea_derivatives.hpp"
 #include "robodiff/functions/model_function.hpp"
@@ -123,11 +124,13 @@ class ModelFunctionBuild {
         throw SpecError("inputs." + in.name + ".fixed: " + std::to_string(in.fixed->size()) + " numbers, but " +
                         (model_.name.empty() ? "the model" : model_.name) + " has " + (in.name == "q" ? "nq" : "nv") +
                         " = " + std::to_string(inputSize(model_, in.name)));
+    bool hessian = false;
     for (std::size_t k = 0; k < spec_.outputs.size(); ++k) {
       const OutputSpec& o = spec_.outputs[k];
       for (const std::string& w : o.wrt) wrt_needed_.insert(w);
       any_jacobian_ = any_jacobian_ || o.kind == OutputKind::Jacobian;
       if (o.kind != OutputKind::Hessian) continue;
+      hessian = true;
       if (o.fixed_weights && static_cast<int>(o.fixed_weights->size()) != value_size_)
         throw SpecError("outputs[" + std::to_string(k) + "].weights: " + std::to_string(o.fixed_weights->size()) +
                         " numbers, but the value of " + info_.name + " has " + std::to_string(value_size_) +
@@ -138,6 +141,8 @@ class ModelFunctionBuild {
     // ABA's Jacobian from RNEA's partials at a = ddq.
     aba_analytic_ = spec_.function == ModelFunction::Aba && options_.aba_jacobian == AbaJacobianMethod::Analytic &&
                     any_jacobian_;
+    // ... and its value from the same sweep, unless a Hessian differentiates the traced value.
+    aba_from_sweep_ = aba_analytic_ && aba_partials_analytic_ && !hessian;
   }
 
   // The model function on symbolic inputs (fixed ones as constants), q moved by dq where
@@ -170,7 +175,7 @@ class ModelFunctionBuild {
 
   void differentiate() {
     rneaPartials();
-    if (aba_analytic_) {
+    if (aba_analytic_ && !aba_from_sweep_) {
       Data<Sym> d(model_);
       // World-frame M: it shares oMi and the subspace columns with RNEA's partials.
       minv_ = tracer_.outputs(computeMinverse(model_, d, q_plain_, CrbaFrame::World));
@@ -185,7 +190,9 @@ class ModelFunctionBuild {
   // RNEA Jacobian or ABA's at a = ddq, or RNEA traced with its own acceleration a* and
   // differentiated (a* := ddq when assembling).
   void rneaPartials() {
-    if (aba_analytic_ && aba_partials_analytic_) {
+    if (aba_from_sweep_) {
+      abaFromSweep();
+    } else if (aba_analytic_ && aba_partials_analytic_) {
       VecX<Sym> ddq(model_.nv);
       for (int i = 0; i < model_.nv; ++i) ddq[i] = Sym(graph_, value_[static_cast<std::size_t>(i)]);
       analyticPartials(ddq);
@@ -205,6 +212,18 @@ class ModelFunctionBuild {
     rnea_partials_["v"] = tracer_.outputs(dv);
     rnea_partials_["a"] = tracer_.outputs(da);
     analytic_tau_ = tracer_.outputs(d.tau);
+  }
+
+  // ABA's value, RNEA's partials at a = ddq and M's factors from one world-frame sweep
+  // (dynamics/aba_derivatives.hpp); the traced ABA is left unused.
+  void abaFromSweep() {
+    Data<Sym> d(model_);
+    const AbaDerivativeTerms<Sym> t = computeAbaDerivativeTerms(model_, d, q_plain_, inputs_[1], inputs_[2]);
+    value_ = tracer_.outputs(t.ddq);
+    rnea_partials_["q"] = tracer_.outputs(t.dtau_dq);
+    rnea_partials_["v"] = tracer_.outputs(t.dtau_dv);
+    mass_factors_ = tracer_.outputs(t.mass_factors);
+    minv_ = tracer_.outputs(inverseFromFactors(dofParents(model_), t.mass_factors));
   }
 
   void differentiatedPartials() {
@@ -331,7 +350,8 @@ class ModelFunctionBuild {
 
   // In words, for descriptions and benchmarks.
   std::string method() const {
-    std::string m = std::string(info_.name) + " traced";
+    std::string m = aba_from_sweep_ ? std::string("aba = M^-1 (tau - nle) from the sweep of its derivatives")
+                                    : std::string(info_.name) + " traced";
     const char* partials = aba_partials_analytic_ ? "analytic RNEA derivatives" : "differentiated RNEA";
     if (aba_analytic_) m += std::string("; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq (") + partials + "), M^-1";
     else if (rnea_from_partials_) m += "; Jacobian from analytic RNEA derivatives (Carpentier-Mansard)";
@@ -351,7 +371,8 @@ class ModelFunctionBuild {
   const FunctionInfo& info_;
   int rows_ = 0, cols_ = 0, value_size_ = 0;
   // What the spec asks for.
-  bool weights_input_ = false, any_jacobian_ = false, aba_analytic_ = false, aba_partials_analytic_ = false;
+  bool weights_input_ = false, any_jacobian_ = false, aba_analytic_ = false, aba_partials_analytic_ = false,
+       aba_from_sweep_ = false;
   std::set<std::string> wrt_needed_;
   // The working trace.
   Graph graph_;

@@ -1,5 +1,6 @@
 #include "user_primitive_rules.hpp"
 
+#include "robodiff/dynamics/aba_derivatives.hpp"
 #include "robodiff/dynamics/all.hpp"
 #include "robodiff/dynamics/lie_group.hpp"
 #include "robodiff/dynamics/minv.hpp"
@@ -32,20 +33,25 @@ MatX<Sym> sparseProduct(const MatX<Sym>& a, const MatX<Sym>& b) {
 MatX<Sym> solveWithMassFactors(const Model& model, const MatX<Sym>& LD, const MatX<Sym>& B) {
   const std::vector<int> lambda = dofParents(model);
   const int n = model.nv;
+  const MatX<Sym> N = inverseUnitFactor(lambda, LD);  // L^-1
   std::vector<Sym> inverse_diagonal;
   for (int i = 0; i < n; ++i) inverse_diagonal.push_back(Sym(1.0) / LD(i, i));
   MatX<Sym> X(n, B.cols());
-  std::vector<Sym> x(static_cast<std::size_t>(n));
+  std::vector<Sym> z(static_cast<std::size_t>(n));
   for (Eigen::Index c = 0; c < B.cols(); ++c) {
-    for (int i = 0; i < n; ++i) x[i] = B(i, c);
-    for (int i = n - 1; i >= 0; --i)  // L^T y = b
+    for (int i = 0; i < n; ++i) z[i] = B(i, c);
+    for (int i = n - 1; i >= 0; --i)  // L^T y = b: y is nonzero on b's rows and their ancestors
       for (int j = lambda[i]; j >= 0; j = lambda[j])
-        if (!isZero(x[i])) x[j] = x[j] - LD(i, j) * x[i];
-    for (int i = 0; i < n; ++i) x[i] = x[i] * inverse_diagonal[i];
-    for (int i = 0; i < n; ++i)  // L x = z
-      for (int j = lambda[i]; j >= 0; j = lambda[j])
-        if (!isZero(x[j])) x[i] = x[i] - LD(i, j) * x[j];
-    for (int r = 0; r < n; ++r) X(r, c) = x[r];
+        if (!isZero(z[i])) z[j] = z[j] - LD(i, j) * z[i];
+    for (int i = 0; i < n; ++i) z[i] = z[i] * inverse_diagonal[i];
+    // x = L^-1 z = N z: row r reads only the ancestors where z is nonzero, so a row on
+    // another branch than b's rows costs the depth of their common ancestors.
+    for (int r = 0; r < n; ++r) {
+      Sym x = z[r];
+      for (int k = lambda[r]; k >= 0; k = lambda[k])
+        if (!isZero(z[k])) x = isZero(x) ? Sym(N(r, k) * z[k]) : Sym(x + N(r, k) * z[k]);
+      X(r, c) = x;
+    }
   }
   return X;
 }
@@ -159,28 +165,19 @@ Value<Sym> rneaRule(const PrimitiveCall& call) {
 }
 
 // aba: ddq = M^-1 (tau - nle); its tangent M^-1 (d tau - R_q dq - R_v dv), R the RNEA
-// partials at a = ddq, by solves with M's tree factors.
+// partials at a = ddq, by solves with M's tree factors; ddq, R and the factors from one
+// sweep (dynamics/aba_derivatives.hpp; R goes unused without q or v tangents).
 Value<Sym> abaRule(const PrimitiveCall& call) {
   const Model& model = call.context.model;
   Data<Sym> data(model);
-  const VecX<Sym> ddq = aba(model, data, call.vectors[0], call.vectors[1], call.vectors[2]);
-  Value<Sym> out = withTangent(ddq, model.nv, tangentColumnsOf(call));
+  const AbaDerivativeTerms<Sym> t =
+      computeAbaDerivativeTerms(model, data, call.vectors[0], call.vectors[1], call.vectors[2]);
+  Value<Sym> out = withTangent(t.ddq, model.nv, tangentColumnsOf(call));
   MatX<Sym> rhs = MatX<Sym>::Zero(model.nv, out.d.cols());
-  MatX<Sym> factors;  // M = L^T D L, from the derivatives' sweep when it runs (d tau / d a = M)
-  if (call.args[0]->has_tangent || call.args[1]->has_tangent) {
-    Data<Sym> d(model);
-    MatX<Sym> dq, dv;
-    computeRneaDerivatives(model, d, call.vectors[0], call.vectors[1], ddq, dq, dv, factors);
-    factorizeMassMatrix(dofParents(model), factors);
-    chain(rhs, MatX<Sym>(-dq), *call.args[0]);
-    chain(rhs, MatX<Sym>(-dv), *call.args[1]);
-  } else {
-    Data<Sym> d(model);
-    computeMinverse(model, d, call.vectors[0]);  // leaves M's factors in d.M
-    factors = d.M;
-  }
+  chain(rhs, MatX<Sym>(-t.dtau_dq), *call.args[0]);
+  chain(rhs, MatX<Sym>(-t.dtau_dv), *call.args[1]);
   if (call.args[2]->has_tangent) rhs += call.args[2]->d;
-  out.d = solveWithMassFactors(model, factors, rhs);
+  out.d = solveWithMassFactors(model, t.mass_factors, rhs);
   return out;
 }
 

@@ -5,6 +5,7 @@
 // zeros are never touched. Branch-free on values: symbolic scalars trace it unchanged.
 #pragma once
 
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -42,6 +43,60 @@ template <class S> void factorizeMassMatrix(const std::vector<int>& lambda, MatX
   }
 }
 
+// x = M^-1 b by the factors: L^T y = b, z = D^-1 y, then L x = z.
+template <class S> VecX<S> solveWithFactors(const std::vector<int>& lambda, const MatX<S>& LD, VecX<S> x) {
+  const int n = static_cast<int>(x.size());
+  for (int i = n - 1; i >= 0; --i)
+    for (int j = lambda[i]; j >= 0; j = lambda[j]) x[j] -= LD(i, j) * x[i];
+  for (int i = 0; i < n; ++i) x[i] *= S(1) / LD(i, i);
+  for (int i = 0; i < n; ++i)
+    for (int j = lambda[i]; j >= 0; j = lambda[j]) x[i] -= LD(i, j) * x[j];
+  return x;
+}
+
+// N = L^-1 for the unit lower triangular L of the factors: N has L's sparsity (row i
+// over i's strict ancestors; the unit diagonal is implied, the rest zero). From L N = I,
+// N(i, j) = -L(i, j) - sum over k strictly between j and i on their path of L(i, k) N(k, j).
+template <class S> MatX<S> inverseUnitFactor(const std::vector<int>& lambda, const MatX<S>& LD) {
+  const int n = static_cast<int>(LD.rows());
+  MatX<S> N = MatX<S>::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = lambda[i]; j >= 0; j = lambda[j]) {
+      S sum = LD(i, j);
+      for (int k = lambda[i]; k != j; k = lambda[k]) sum += LD(i, k) * N(k, j);
+      N(i, j) = -sum;
+    }
+  return N;
+}
+
+// M^-1 = N D^-1 N^T: M^-1(r, c) sums N(r, k) N(c, k) / D_k over the common ancestors k of
+// r and c (themselves included), so a pair on different branches costs the depth of
+// their common ancestor, not the depth of its row as a forward substitution does.
+template <class S> MatX<S> inverseFromFactors(const std::vector<int>& lambda, const MatX<S>& LD) {
+  const int n = static_cast<int>(LD.rows());
+  const MatX<S> N = inverseUnitFactor(lambda, LD);
+  auto unit = [&](int r, int k) { return r == k ? S(1) : N(r, k); };
+  MatX<S> Minv(n, n);
+  std::vector<S> inverse_diagonal, scaled(static_cast<std::size_t>(n));  // scaled: N(c, k) / D_k on c's path
+  for (int k = 0; k < n; ++k) inverse_diagonal.push_back(S(1) / LD(k, k));
+  std::vector<char> on_path(static_cast<std::size_t>(n));
+  for (int c = 0; c < n; ++c) {
+    std::fill(on_path.begin(), on_path.end(), 0);
+    for (int k = c; k >= 0; k = lambda[k]) {
+      scaled[k] = k == c ? inverse_diagonal[k] : N(c, k) * inverse_diagonal[k];
+      on_path[k] = 1;
+    }
+    for (int r = c; r < n; ++r) {  // the lower triangle; M^-1 is symmetric
+      int k = r;
+      while (k >= 0 && !on_path[k]) k = lambda[k];  // the deepest common ancestor
+      S sum = S(0);  // stays 0 where r and c are on separate trees (chains fixed to the world)
+      for (; k >= 0; k = lambda[k]) sum += unit(r, k) * scaled[k];
+      Minv(r, c) = Minv(c, r) = sum;
+    }
+  }
+  return Minv;
+}
+
 // M^-1 (nv x nv, symmetric), with M from crba (the form the scalar picks, or `frame`:
 // CrbaFrame::World where the trace has the world placements already); data.M holds the
 // factors.
@@ -53,22 +108,7 @@ MatX<S> computeMinverse(const Model& model, Data<S>& data, const Eigen::MatrixBa
   MatX<S>& LD = data.M;  // only the lower triangle is read and written
   const std::vector<int> lambda = dofParents(model);
   factorizeMassMatrix(lambda, LD);
-  const int n = model.nv;
-  MatX<S> Minv(n, n);
-  VecX<S> x(n);
-  for (int col = 0; col < n; ++col) {
-    // Solve L^T D L x = e_col. Only the lower triangle (rows >= col) is computed; the
-    // matrix is symmetric.
-    x.setZero();
-    x[col] = S(1);
-    for (int i = n - 1; i >= 0; --i)  // L^T y = e: y = L^-T e
-      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[j] -= LD(i, j) * x[i];
-    for (int i = 0; i < n; ++i) x[i] /= LD(i, i);
-    for (int i = 0; i < n; ++i)  // L x = y
-      for (int j = lambda[i]; j >= 0; j = lambda[j]) x[i] -= LD(i, j) * x[j];
-    for (int r = col; r < n; ++r) Minv(r, col) = Minv(col, r) = x[r];
-  }
-  return Minv;
+  return inverseFromFactors(lambda, LD);
 }
 
 }  // namespace robodiff
