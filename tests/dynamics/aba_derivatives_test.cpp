@@ -1,7 +1,7 @@
 // What ABA's derivatives are made of, from one world-frame sweep
 // (dynamics/aba_derivatives.hpp): ddq against Pinocchio's ABA in ../shared/golden and the
 // partials assembled into d ddq/d(q, v) against its computeABADerivatives (1e-9); on the
-// project's own robots (a free-flyer, a base with four legs fixed to the world, prismatic
+// project's own robots (a free-flyer, four legs on a trunk fixed to the world, prismatic
 // joints), every term against the separate algorithms: aba, the RNEA partials at
 // a = ddq, and M from crba, factorised.
 #include <random>
@@ -70,22 +70,8 @@ TEST_P(AbaDerivativeTermsAgainstSeparateAlgorithms, AgreeWithAbaRneaPartialsAndC
   }
 }
 
-std::vector<testing::RobotCase> abaTermRobots() {
-  GeneratorOptions quadruped;
-  quadruped.kind = RobotKind::Tree;
-  quadruped.tree = "quadruped";
-  quadruped.seed = 11;
-  quadruped.prismatic_fraction = 0.25;
-  GeneratorOptions chain;
-  chain.joints = 8;
-  chain.seed = 23;
-  chain.prismatic_fraction = 0.4;
-  return {{"quadruped_free_flyer", quadruped, RootJoint::FreeFlyer},
-          {"quadruped_legs_fixed_to_the_world", quadruped, RootJoint::Fixed},
-          {"chain8_prismatic", chain, RootJoint::Fixed}};
-}
-
-INSTANTIATE_TEST_SUITE_P(GeneratedRobots, AbaDerivativeTermsAgainstSeparateAlgorithms, ::testing::ValuesIn(abaTermRobots()),
+INSTANTIATE_TEST_SUITE_P(GeneratedRobots, AbaDerivativeTermsAgainstSeparateAlgorithms,
+                         ::testing::ValuesIn(testing::branchedAndPrismaticRobots()),
                          [](const auto& info) { return info.param.label; });
 
 }  // namespace

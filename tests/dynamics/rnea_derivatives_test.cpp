@@ -69,22 +69,8 @@ TEST_P(RneaDerivativesFiniteDifferences, MatchCentralDifferences) {
   }
 }
 
-std::vector<testing::RobotCase> robots() {
-  GeneratorOptions quadruped;
-  quadruped.kind = RobotKind::Tree;
-  quadruped.tree = "quadruped";
-  quadruped.seed = 9;
-  quadruped.prismatic_fraction = 0.25;
-  GeneratorOptions chain;
-  chain.joints = 8;
-  chain.seed = 21;
-  chain.prismatic_fraction = 0.4;
-  return {{"quadruped_free_flyer", quadruped, RootJoint::FreeFlyer},
-          {"quadruped_fixed", quadruped, RootJoint::Fixed},
-          {"chain8_prismatic", chain, RootJoint::Fixed}};
-}
-
-INSTANTIATE_TEST_SUITE_P(GeneratedRobots, RneaDerivativesFiniteDifferences, ::testing::ValuesIn(robots()),
+INSTANTIATE_TEST_SUITE_P(GeneratedRobots, RneaDerivativesFiniteDifferences,
+                         ::testing::ValuesIn(testing::branchedAndPrismaticRobots()),
                          [](const auto& info) { return info.param.label; });
 
 }  // namespace
