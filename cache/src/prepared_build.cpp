@@ -19,6 +19,14 @@ const char* methodName(RneaJacobianMethod m) {
   }
   return "unknown";
 }
+const char* methodName(AbaValueMethod m) {
+  switch (m) {
+    case AbaValueMethod::Articulated: return "articulated";
+    case AbaValueMethod::Factors: return "factors";
+    case AbaValueMethod::Cheaper: return "cheaper";
+  }
+  return "unknown";
+}
 
 // The generator's version and every builder and codegen option that changes the code
 // generated for the same model and spec (the C name included: it is in the library).
@@ -27,7 +35,7 @@ std::string generatorIdentity(const LibraryOptions& options, const std::string& 
   const codegen::CodegenOptions& c = options.codegen;
   return std::string(codegen::kGeneratorVersion) + "; name=" + c_name + "; aba_jacobian=" +
          methodName(b.aba_jacobian) + "; rnea_jacobian=" + methodName(b.rnea_jacobian) +
-         "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) +
+         "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) + "; aba_value=" + methodName(b.aba_value) +
          "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
          "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
 }

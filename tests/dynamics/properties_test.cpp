@@ -113,6 +113,17 @@ TEST_P(Properties, AbaInvertsRnea) {
   }
 }
 
+TEST_P(Properties, ForwardDynamicsByFactorsIsAba) {
+  Data<double> data(model);
+  for (int s = 0; s < kSamples; ++s) {
+    State x = randomState(s);
+    const Eigen::VectorXd tau = rnea(model, data, x.q, x.v, x.a);
+    const Eigen::VectorXd by_factors = forwardDynamicsByFactors(model, data, x.q, x.v, tau);
+    EXPECT_TRUE(matricesAgree(by_factors, aba(model, data, x.q, x.v, tau), 1e-9));
+    EXPECT_TRUE(matricesAgree(by_factors, x.a, 1e-9));
+  }
+}
+
 TEST_P(Properties, MinverseInvertsTheMassMatrix) {
   // The tree-structured factorisation against a dense LU inverse, and against ABA:
   // M^-1 (tau - nle) is the forward dynamics.

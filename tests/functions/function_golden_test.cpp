@@ -1,7 +1,8 @@
 // Built functions against Pinocchio's derivatives in ../shared/golden (1e-9): RNEA
 // d tau/d(q, v, a) and ABA d ddq/d(q, v, tau), fixed and floating base; ABA's analytic
 // Jacobian equals the differentiated one and is the smaller graph; the RNEA Jacobian is
-// the cheaper of its two ways, which agree.
+// the cheaper of its two ways, which agree; so is a value-only ABA.
+#include <algorithm>
 #include <iostream>
 
 #include <Eigen/LU>
@@ -123,6 +124,38 @@ TEST(RneaJacobian, TheCheaperOfAnalyticAndDifferentiatedIsKeptAndBothAgree) {
     const testing::GoldenRobot golden = testing::loadGolden(shared, name);
     const std::string method = buildFunction(loadUrdfFile(golden.urdf.string()), jacobianSpec(ModelFunction::Rnea)).method;
     EXPECT_EQ(method.find("Jacobian from analytic") != std::string::npos, analytic) << name << ": " << method;
+  }
+}
+
+// A value-only ABA is built both ways (ABA, and M^-1 (tau - nle) by M's tree factors); the
+// one with fewer operations is kept, and both give Pinocchio's ABA. The factors are the
+// smaller on the Panda and the fixed Talos, ABA on the free-flying Talos.
+TEST(AbaValue, TheCheaperOfArticulatedAndFactorsIsKeptAndBothMatchPinocchio) {
+  ROBODIFF_REQUIRE_SHARED(shared);
+  const FunctionSpec spec = parseFunctionSpec(R"({"function": "aba", "outputs": [{"kind": "value"}]})");
+  for (const auto& [name, factors_expected] :
+       {std::pair{"panda", true}, std::pair{"talos", true}, std::pair{"talos_ff", false}}) {
+    SCOPED_TRACE(name);
+    const testing::GoldenRobot golden = testing::loadGolden(shared, name);
+    const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
+    FunctionBuilderOptions articulated_options, factors_options;
+    articulated_options.aba_value = AbaValueMethod::Articulated;
+    factors_options.aba_value = AbaValueMethod::Factors;
+    const BuiltFunction articulated = buildFunction(model, spec, articulated_options);
+    const BuiltFunction factors = buildFunction(model, spec, factors_options);
+    const BuiltFunction chosen = buildFunction(model, spec);
+    std::cout << name << " ABA value: articulated " << operations(articulated) << " operations, factors "
+              << operations(factors) << "; kept: " << chosen.method << "\n";
+    const bool factors_kept = operations(factors) <= operations(articulated);
+    EXPECT_EQ(factors_kept, factors_expected);
+    EXPECT_EQ(operations(chosen), std::min(operations(factors), operations(articulated)));
+    EXPECT_EQ(chosen.method.find("by M's tree factors") != std::string::npos, factors_kept) << chosen.method;
+    codegen::Interpreter a(*articulated.graph, articulated.definition), f(*factors.graph, factors.definition);
+    for (std::size_t s = 0; s < golden.samples.size(); s += 3) {
+      const auto& x = golden.samples[s];
+      EXPECT_TRUE(matricesAgree(evaluateBlocks(a, articulated.definition, {x.q, x.v, x.tau})[0], x.ddq, 1e-9));
+      EXPECT_TRUE(matricesAgree(evaluateBlocks(f, factors.definition, {x.q, x.v, x.tau})[0], x.ddq, 1e-9));
+    }
   }
 }
 

@@ -17,44 +17,70 @@ std::size_t builtOperations(const BuiltFunction& f) {
   return symbolic::coneSize(*f.graph, outputs).operations;
 }
 
-BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
-  if (spec.user) return detail::buildUserFunction(model, spec, options);
-  const bool rnea_jacobian = spec.function == ModelFunction::Rnea &&
-                             std::any_of(spec.outputs.begin(), spec.outputs.end(),
-                                         [](const OutputSpec& o) { return o.kind == OutputKind::Jacobian; });
-  if (options.rnea_jacobian != RneaJacobianMethod::Cheaper || !rnea_jacobian) {
-    FunctionBuilderOptions one = options;
-    if (one.rnea_jacobian == RneaJacobianMethod::Cheaper) one.rnea_jacobian = RneaJacobianMethod::Differentiate;
-    return detail::buildModelFunction(model, spec, one);
-  }
-  // Both ways (tracing takes milliseconds); a graph past the node limit on one way leaves
-  // the other.
-  FunctionBuilderOptions analytic = options, differentiated = options;
-  analytic.rnea_jacobian = RneaJacobianMethod::Analytic;
-  differentiated.rnea_jacobian = RneaJacobianMethod::Differentiate;
-  std::optional<BuiltFunction> a, d;
+namespace {
+
+// One way of building a function, and how the method names it when the other is kept.
+struct Way {
+  FunctionBuilderOptions options;
+  const char* name;
+};
+
+// Builds `spec` both ways (tracing takes milliseconds) and keeps the first where it needs
+// at most `ratio` of the second's operations, else the second; a graph past the node
+// limit on one way leaves the other.
+BuiltFunction cheaperOf(const Model& model, const FunctionSpec& spec, const Way& first, const Way& second,
+                        double ratio) {
+  std::optional<BuiltFunction> a, b;
   try {
-    a = detail::buildModelFunction(model, spec, analytic);
+    a = detail::buildModelFunction(model, spec, first.options);
   } catch (const symbolic::GraphTooLarge&) {
   }
   try {
-    d = detail::buildModelFunction(model, spec, differentiated);
+    b = detail::buildModelFunction(model, spec, second.options);
   } catch (const symbolic::GraphTooLarge&) {
     if (!a) throw;
   }
-  if (!a) return std::move(*d);
-  if (!d) return std::move(*a);
-  const std::size_t a_ops = builtOperations(*a), d_ops = builtOperations(*d);
-  const bool analytic_kept = static_cast<double>(a_ops) <= kAnalyticRneaOperationsRatio * static_cast<double>(d_ops);
-  BuiltFunction& kept = analytic_kept ? *a : *d;
-  const BuiltFunction& other = analytic_kept ? *d : *a;
-  kept.method += "; chosen over " + std::string(analytic_kept ? "differentiation" : "the analytic derivatives") + " (" +
-                 std::to_string(analytic_kept ? a_ops : d_ops) + " operations against " +
-                 std::to_string(analytic_kept ? d_ops : a_ops) + ")";
+  if (!a) return std::move(*b);
+  if (!b) return std::move(*a);
+  const std::size_t a_ops = builtOperations(*a), b_ops = builtOperations(*b);
+  const bool first_kept = static_cast<double>(a_ops) <= ratio * static_cast<double>(b_ops);
+  BuiltFunction& kept = first_kept ? *a : *b;
+  const BuiltFunction& other = first_kept ? *b : *a;
+  kept.method += "; chosen over " + std::string(first_kept ? second.name : first.name) + " (" +
+                 std::to_string(first_kept ? a_ops : b_ops) + " operations against " +
+                 std::to_string(first_kept ? b_ops : a_ops) + ")";
   kept.timings.trace_seconds += other.timings.trace_seconds;
   kept.timings.differentiate_seconds += other.timings.differentiate_seconds;
   kept.timings.assemble_seconds += other.timings.assemble_seconds;
   return std::move(kept);
+}
+
+bool hasOutput(const FunctionSpec& spec, OutputKind kind) {
+  return std::any_of(spec.outputs.begin(), spec.outputs.end(), [&](const OutputSpec& o) { return o.kind == kind; });
+}
+
+}  // namespace
+
+BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  if (spec.user) return detail::buildUserFunction(model, spec, options);
+  FunctionBuilderOptions one = options;
+  if (one.rnea_jacobian == RneaJacobianMethod::Cheaper) one.rnea_jacobian = RneaJacobianMethod::Differentiate;
+  if (one.aba_value == AbaValueMethod::Cheaper) one.aba_value = AbaValueMethod::Articulated;
+  const bool rnea_jacobian = spec.function == ModelFunction::Rnea && hasOutput(spec, OutputKind::Jacobian);
+  if (options.rnea_jacobian == RneaJacobianMethod::Cheaper && rnea_jacobian) {
+    Way analytic{one, "the analytic derivatives"}, differentiated{one, "differentiation"};
+    analytic.options.rnea_jacobian = RneaJacobianMethod::Analytic;
+    return cheaperOf(model, spec, analytic, differentiated, kAnalyticRneaOperationsRatio);
+  }
+  // With a Jacobian, ABA's value comes from its derivatives' sweep; alone, it is built both ways.
+  const bool aba_value_only = spec.function == ModelFunction::Aba && !hasOutput(spec, OutputKind::Jacobian) &&
+                              !hasOutput(spec, OutputKind::Hessian);
+  if (options.aba_value == AbaValueMethod::Cheaper && aba_value_only) {
+    Way factors{one, "M^-1 (tau - nle) by the factors"}, articulated{one, "ABA"};
+    factors.options.aba_value = AbaValueMethod::Factors;
+    return cheaperOf(model, spec, factors, articulated, 1.0);
+  }
+  return detail::buildModelFunction(model, spec, one);
 }
 
 }  // namespace robodiff

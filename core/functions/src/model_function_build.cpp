@@ -163,7 +163,14 @@ class ModelFunctionBuild {
     q_plain_ = inputs_[0];  // analytic derivatives are tangent already
     if (tangent_) inputs_[0] = symbolic::integrateSecondOrder(model_, inputs_[0], tracer_.addInputs("dq", model_.nv));
     Data<Sym> data(model_);
-    value_ = tracer_.outputs(modelFunctionValue(model_, data, spec_, resolveFrame(model_, spec_), inputs_));
+    if (abaByFactors())
+      value_ = tracer_.outputs(forwardDynamicsByFactors(model_, data, inputs_[0], inputs_[1], inputs_[2]));
+    else
+      value_ = tracer_.outputs(modelFunctionValue(model_, data, spec_, resolveFrame(model_, spec_), inputs_));
+  }
+
+  bool abaByFactors() const {
+    return spec_.function == ModelFunction::Aba && options_.aba_value == AbaValueMethod::Factors;
   }
 
   // The tangent columns of named inputs (q -> dq when moving on the manifold).
@@ -351,7 +358,8 @@ class ModelFunctionBuild {
   // In words, for descriptions and benchmarks.
   std::string method() const {
     std::string m = aba_from_sweep_ ? std::string("aba = M^-1 (tau - nle) from the sweep of its derivatives")
-                                    : std::string(info_.name) + " traced";
+                    : abaByFactors()  ? std::string("aba = M^-1 (tau - nle) by M's tree factors (rnea at a = 0, crba)")
+                                      : std::string(info_.name) + " traced";
     const char* partials = aba_partials_analytic_ ? "analytic RNEA derivatives" : "differentiated RNEA";
     if (aba_analytic_) m += std::string("; Jacobian = -M^-1 d rnea/d(q, v) at a = ddq (") + partials + "), M^-1";
     else if (rnea_from_partials_) m += "; Jacobian from analytic RNEA derivatives (Carpentier-Mansard)";

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "robodiff/dynamics/crba.hpp"
+#include "robodiff/dynamics/rnea.hpp"
 
 namespace robodiff {
 
@@ -109,6 +110,20 @@ MatX<S> computeMinverse(const Model& model, Data<S>& data, const Eigen::MatrixBa
   const std::vector<int> lambda = dofParents(model);
   factorizeMassMatrix(lambda, LD);
   return inverseFromFactors(lambda, LD);
+}
+
+// Forward dynamics without articulated inertias: ddq = M^-1 (tau - nle), nle = RNEA(q, v, 0),
+// M from crba, by the tree factors. Traced, it is smaller than ABA where M's composite
+// inertias fold well (fixed bases, small robots), larger on the free-flying Talos
+// (docs/code-generation.md); the function builder builds both and keeps the smaller.
+template <class S, class Q, class V, class T>
+VecX<S> forwardDynamicsByFactors(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q,
+                                 const Eigen::MatrixBase<V>& v, const Eigen::MatrixBase<T>& tau) {
+  const VecX<S> bias = tau - nonLinearEffects(model, data, q, v);
+  MatX<S> LD = crba(model, data, q);
+  const std::vector<int> lambda = dofParents(model);
+  factorizeMassMatrix(lambda, LD);
+  return solveWithFactors(lambda, LD, bias);
 }
 
 }  // namespace robodiff
