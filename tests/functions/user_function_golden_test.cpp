@@ -31,6 +31,33 @@ const char* kStep = R"js({
 
 class UserGolden : public ::testing::TestWithParam<std::string> {};
 
+// A value-only step: aba's value built as ABA and as M^-1 (tau - nle) by M's tree
+// factors, both against Pinocchio's ddq; the default keeps the one with fewer operations.
+TEST_P(UserGolden, AValueOnlyStepMatchesPinocchioWithEitherAbaAndKeepsTheSmaller) {
+  ROBODIFF_REQUIRE_SHARED(shared);
+  const testing::GoldenRobot golden = testing::loadGolden(shared, GetParam());
+  const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
+  const FunctionSpec spec = parseFunctionSpec(R"js({
+    "inputs": {"q": "configuration", "v": "nv", "u": "nv", "dt": {"fixed": [0.01]}},
+    "outputs": [{"name": "v_next", "kind": "value", "of": "v + dt * aba(q, v, u)"}]})js");
+  FunctionBuilderOptions articulated_options, factors_options;
+  articulated_options.aba_value = AbaValueMethod::Articulated;
+  factors_options.aba_value = AbaValueMethod::Factors;
+  const BuiltFunction articulated = buildFunction(model, spec, articulated_options);
+  const BuiltFunction factors = buildFunction(model, spec, factors_options);
+  const BuiltFunction chosen = buildFunction(model, spec);
+  const std::size_t a_ops = builtOperations(articulated), f_ops = builtOperations(factors);
+  EXPECT_NE(a_ops, f_ops);  // two different traces
+  EXPECT_EQ(builtOperations(chosen), std::min(a_ops, f_ops));
+  EXPECT_NE(chosen.method.find(f_ops <= a_ops ? "chosen over ABA" : "chosen over M^-1"), std::string::npos) << chosen.method;
+  codegen::Interpreter ia(*articulated.graph, articulated.definition), jf(*factors.graph, factors.definition);
+  for (std::size_t s = 0; s < golden.samples.size(); s += 5) {
+    const testing::GoldenSample& x = golden.samples[s];
+    EXPECT_TRUE(matricesAgree(evaluateBlocks(ia, articulated.definition, {x.q, x.v, x.tau})[0], x.v + kDt * x.ddq, 1e-9));
+    EXPECT_TRUE(matricesAgree(evaluateBlocks(jf, factors.definition, {x.q, x.v, x.tau})[0], x.v + kDt * x.ddq, 1e-9));
+  }
+}
+
 TEST_P(UserGolden, EulerStepJacobianIsChainedFromPinocchiosDerivatives) {
   ROBODIFF_REQUIRE_SHARED(shared);
   const testing::GoldenRobot golden = testing::loadGolden(shared, GetParam());

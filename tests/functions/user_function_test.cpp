@@ -58,6 +58,38 @@ TEST(UserFunction, EulerStepOnAFloatingQuadruped) {
   expectMatchesReference(exampleRobot("quadruped", RootJoint::FreeFlyer), kEulerStep, 2, 2e-6);
 }
 
+// Value outputs only: aba's value built both ways (ABA, and M^-1 (tau - nle) by M's tree
+// factors) and the smaller kept; each way against the reference (ABA in doubles) and a
+// function with a derivative output, where aba's value comes from the derivatives' sweep.
+TEST(UserFunction, AValueOnlyStepKeepsTheSmallerOfAbaAndTheFactors) {
+  const char* value_only = R"js({
+    "inputs": {"q": "configuration", "v": "nv", "u": "nv", "dt": {"fixed": [0.01]}},
+    "define": {"v_next": "v + dt * aba(q, v, u)", "q_next": "integrate(q, dt * v_next)"},
+    "outputs": [{"name": "q_next", "kind": "value", "of": "q_next"}, {"name": "v_next", "kind": "value", "of": "v_next"}]})js";
+  for (const Model& model : {exampleRobot("arm7"), exampleRobot("quadruped", RootJoint::FreeFlyer)}) {
+    SCOPED_TRACE(model.name);
+    expectMatchesReference(model, value_only);
+    const FunctionSpec spec = parseFunctionSpec(value_only);
+    FunctionBuilderOptions articulated_options, factors_options;
+    articulated_options.aba_value = AbaValueMethod::Articulated;
+    factors_options.aba_value = AbaValueMethod::Factors;
+    const BuiltFunction a = buildFunction(model, spec, articulated_options), f = buildFunction(model, spec, factors_options);
+    const BuiltFunction chosen = buildFunction(model, spec);
+    EXPECT_NE(builtOperations(a), builtOperations(f));
+    EXPECT_EQ(builtOperations(chosen), std::min(builtOperations(a), builtOperations(f)));
+    codegen::Interpreter ia(*a.graph, a.definition), jf(*f.graph, f.definition);
+    const std::vector<Eigen::VectorXd> x = randomRuntimeInputs(model, spec, 7);
+    const std::vector<Eigen::VectorXd> ya = evaluateBlocks(ia, a.definition, x), yf = evaluateBlocks(jf, f.definition, x);
+    for (std::size_t k = 0; k < ya.size(); ++k) EXPECT_TRUE(matricesAgree(yf[k], ya[k], 1e-12));
+  }
+  // With a Jacobian, the option changes nothing: aba's value is the sweep's.
+  const Model arm = exampleRobot("arm7");
+  FunctionBuilderOptions articulated_options;
+  articulated_options.aba_value = AbaValueMethod::Articulated;
+  EXPECT_EQ(builtOperations(buildFunction(arm, parseFunctionSpec(kEulerStep), articulated_options)),
+            builtOperations(buildFunction(arm, parseFunctionSpec(kEulerStep))));
+}
+
 TEST(UserFunction, TrackingCostGradientAndHessian) {
   for (RootJoint root : {RootJoint::Fixed, RootJoint::FreeFlyer})
     expectMatchesReference(exampleRobot("arm7", root), R"js({

@@ -30,13 +30,16 @@ struct Way {
 // limit on one way leaves the other.
 BuiltFunction cheaperOf(const Model& model, const FunctionSpec& spec, const Way& first, const Way& second,
                         double ratio) {
+  auto build = [&](const FunctionBuilderOptions& o) {
+    return spec.user ? detail::buildUserFunction(model, spec, o) : detail::buildModelFunction(model, spec, o);
+  };
   std::optional<BuiltFunction> a, b;
   try {
-    a = detail::buildModelFunction(model, spec, first.options);
+    a = build(first.options);
   } catch (const symbolic::GraphTooLarge&) {
   }
   try {
-    b = detail::buildModelFunction(model, spec, second.options);
+    b = build(second.options);
   } catch (const symbolic::GraphTooLarge&) {
     if (!a) throw;
   }
@@ -59,26 +62,34 @@ bool hasOutput(const FunctionSpec& spec, OutputKind kind) {
   return std::any_of(spec.outputs.begin(), spec.outputs.end(), [&](const OutputSpec& o) { return o.kind == kind; });
 }
 
+// ABA's value where no Jacobian comes with it, in a model function or in a user function
+// with value outputs only (with derivatives, `aba` takes its value from their sweep).
+bool abaValueOnly(const FunctionSpec& spec) {
+  if (spec.user)
+    return detail::callsPrimitive(*spec.user, "aba") &&
+           std::all_of(spec.user->outputs.begin(), spec.user->outputs.end(),
+                       [](const UserOutput& o) { return o.kind == UserOutputKind::Value; });
+  return spec.function == ModelFunction::Aba && !hasOutput(spec, OutputKind::Jacobian) &&
+         !hasOutput(spec, OutputKind::Hessian);
+}
+
 }  // namespace
 
 BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
-  if (spec.user) return detail::buildUserFunction(model, spec, options);
   FunctionBuilderOptions one = options;
   if (one.rnea_jacobian == RneaJacobianMethod::Cheaper) one.rnea_jacobian = RneaJacobianMethod::Differentiate;
   if (one.aba_value == AbaValueMethod::Cheaper) one.aba_value = AbaValueMethod::Articulated;
+  if (options.aba_value == AbaValueMethod::Cheaper && abaValueOnly(spec)) {
+    Way factors{one, "M^-1 (tau - nle) by the factors"}, articulated{one, "ABA"};
+    factors.options.aba_value = AbaValueMethod::Factors;
+    return cheaperOf(model, spec, factors, articulated, 1.0);
+  }
+  if (spec.user) return detail::buildUserFunction(model, spec, one);
   const bool rnea_jacobian = spec.function == ModelFunction::Rnea && hasOutput(spec, OutputKind::Jacobian);
   if (options.rnea_jacobian == RneaJacobianMethod::Cheaper && rnea_jacobian) {
     Way analytic{one, "the analytic derivatives"}, differentiated{one, "differentiation"};
     analytic.options.rnea_jacobian = RneaJacobianMethod::Analytic;
     return cheaperOf(model, spec, analytic, differentiated, kAnalyticRneaOperationsRatio);
-  }
-  // With a Jacobian, ABA's value comes from its derivatives' sweep; alone, it is built both ways.
-  const bool aba_value_only = spec.function == ModelFunction::Aba && !hasOutput(spec, OutputKind::Jacobian) &&
-                              !hasOutput(spec, OutputKind::Hessian);
-  if (options.aba_value == AbaValueMethod::Cheaper && aba_value_only) {
-    Way factors{one, "M^-1 (tau - nle) by the factors"}, articulated{one, "ABA"};
-    factors.options.aba_value = AbaValueMethod::Factors;
-    return cheaperOf(model, spec, factors, articulated, 1.0);
   }
   return detail::buildModelFunction(model, spec, one);
 }

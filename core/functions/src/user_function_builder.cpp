@@ -183,7 +183,9 @@ void checkShapeFrames(const Model& model, const UserFunction& f) {
   }
 }
 
-Traced traceUserFunction(const Model& model, const FunctionSpec& spec, bool primitive_rules, std::size_t node_limit) {
+Traced traceUserFunction(const Model& model, const FunctionSpec& spec, bool primitive_rules,
+                         const FunctionBuilderOptions& options) {
+  const std::size_t node_limit = options.node_limit;
   const UserFunction& f = *spec.user;
   checkShapeFrames(model, f);
   const std::map<std::string, int> sizes = inputSizes(model, f);
@@ -201,7 +203,8 @@ Traced traceUserFunction(const Model& model, const FunctionSpec& spec, bool prim
   Trace& t = *traced.trace;
   t.graph.setNodeLimit(node_limit);
   const std::map<std::string, Value<Sym>> inputs = traceInputs(model, f, sizes, layout, hessian_wrt, t);
-  const PrimitiveContext context{model, f, primitive_rules, node_limit, &t.graph};
+  PrimitiveContext context{model, f, primitive_rules, node_limit, &t.graph};
+  context.aba_by_factors = options.aba_value == AbaValueMethod::Factors;
   Evaluator<Sym> ev(context, inputs);
   for (std::size_t k = 0; k < f.outputs.size(); ++k)
     traced.outputs.push_back(traceOutput(model, f, k, ev.output(k), ev, layout, inputs, t));
@@ -230,6 +233,31 @@ std::size_t operationsOf(const Traced& traced, std::size_t node_limit) {
 
 namespace {
 
+bool exprCalls(const language::Expr& e, const std::string& name) {
+  if (e.kind == language::ExprKind::Call && e.text == name) return true;
+  auto calls = [&](const language::ExprPtr& p) { return p && exprCalls(*p, name); };
+  for (const language::ExprPtr& a : e.args)
+    if (calls(a)) return true;
+  for (const std::vector<language::ExprPtr>& row : e.rows)
+    for (const language::ExprPtr& a : row)
+      if (calls(a)) return true;
+  for (const language::IndexRange& r : e.ranges)
+    if (calls(r.begin) || calls(r.end)) return true;
+  return false;
+}
+
+}  // namespace
+
+bool callsPrimitive(const UserFunction& f, const std::string& name) {
+  for (const UserDefine& d : f.defines)
+    if (d.expr && exprCalls(*d.expr, name)) return true;
+  for (const UserOutput& o : f.outputs)
+    if (o.of_expr && exprCalls(*o.of_expr, name)) return true;
+  return false;
+}
+
+namespace {
+
 BuiltFunction buildChecked(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options);
 
 }  // namespace
@@ -251,7 +279,7 @@ namespace {
 BuiltFunction buildChecked(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
   const UserFunction& f = *spec.user;
   const auto start = std::chrono::steady_clock::now();
-  Traced traced = traceUserFunction(model, spec, true, options.node_limit);
+  Traced traced = traceUserFunction(model, spec, true, options);
   BuiltFunction built;
   built.timings.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   built.trace_nodes = traced.trace->graph.size();
@@ -292,13 +320,15 @@ BuiltFunction buildChecked(const Model& model, const FunctionSpec& spec, const F
   if (derivatives) {
     built.rule_operations = builtOperations(built);
     try {
-      built.traced_operations = operationsOf(traceUserFunction(model, spec, false, options.node_limit), options.node_limit);
+      built.traced_operations = operationsOf(traceUserFunction(model, spec, false, options), options.node_limit);
       built.method += " (" + std::to_string(built.rule_operations) + " operations; " +
                       std::to_string(built.traced_operations) + " differentiating the primitives' traces)";
     } catch (const symbolic::GraphTooLarge&) {
       built.method += " (differentiating the primitives' traces exceeds the node limit)";
     }
   }
+  if (options.aba_value == AbaValueMethod::Factors && callsPrimitive(f, "aba"))
+    built.method += "; aba's value without tangents as M^-1 (tau - nle) by M's tree factors";
   bool hessian = false;
   for (const UserOutput& o : f.outputs) hessian = hessian || o.kind == UserOutputKind::Hessian;
   if (hessian) built.method += "; Hessians by differentiating the traced value twice";

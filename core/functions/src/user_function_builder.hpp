@@ -8,4 +8,7 @@ namespace robodiff::detail {
 
 BuiltFunction buildUserFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options);
 
+// Whether any define or output of `f` calls the primitive `name`.
+bool callsPrimitive(const UserFunction& f, const std::string& name);
+
 }  // namespace robodiff::detail

@@ -155,7 +155,8 @@ MatX<S> primitiveValue(const PrimitiveContext& c, const std::string& name, const
   Data<S> data(m);
   auto reference = [&](std::size_t k) { return k < s.size() && !s[k].empty() ? parseReferenceFrame(s[k]) : ReferenceFrame::LocalWorldAligned; };
   if (name == "rnea") return rnea(m, data, v[0], v[1], v[2]);
-  if (name == "aba") return aba(m, data, v[0], v[1], v[2]);
+  if (name == "aba")
+    return c.aba_by_factors ? forwardDynamicsByFactors(m, data, v[0], v[1], v[2]) : aba(m, data, v[0], v[1], v[2]);
   if (name == "crba") return crba(m, data, v[0]);
   if (name == "minv") return computeMinverse(m, data, v[0]);
   if (name == "nle") return nonLinearEffects(m, data, v[0], v[1]);

@@ -41,6 +41,7 @@ struct PrimitiveContext {
   bool primitive_rules = true;  // false: every primitive's partials by differentiating its trace
   std::size_t node_limit = 0;   // of scratch graphs
   symbolic::Graph* graph = nullptr;  // tracing: the graph the function is traced into
+  bool aba_by_factors = false;  // aba's value as M^-1 (tau - nle) by M's tree factors (minv.hpp)
 };
 
 // One argument as the evaluator hands it over: a value, or a string literal.
