@@ -30,6 +30,17 @@ MatX<Sym> sparseProduct(const MatX<Sym>& a, const MatX<Sym>& b) {
   return out;
 }
 
+namespace {
+
+// to += m, skipping m's structural zeros.
+void addSparse(MatX<Sym>& to, const MatX<Sym>& m) {
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j)
+      if (!isZero(m(i, j))) to(i, j) = isZero(to(i, j)) ? m(i, j) : Sym(to(i, j) + m(i, j));
+}
+
+}  // namespace
+
 MatX<Sym> solveWithMassFactors(const Model& model, const MatX<Sym>& LD, const MatX<Sym>& B) {
   const std::vector<int> lambda = dofParents(model);
   const int n = model.nv;
@@ -176,8 +187,22 @@ Value<Sym> abaRule(const PrimitiveCall& call) {
   MatX<Sym> rhs = MatX<Sym>::Zero(model.nv, out.d.cols());
   chain(rhs, MatX<Sym>(-t.dtau_dq), *call.args[0]);
   chain(rhs, MatX<Sym>(-t.dtau_dv), *call.args[1]);
-  if (call.args[2]->has_tangent) rhs += call.args[2]->d;
+  // tau's tangent columns with one entry (u's own tangent block) take columns of M^-1, each
+  // pair computed once by symmetry (inverseFromFactors); solving for them would compute
+  // both M^-1(r, c) and M^-1(c, r). Denser columns join the solve.
+  MatX<Sym> selected = MatX<Sym>::Zero(model.nv, out.d.cols());
+  bool any_selected = false;
+  if (call.args[2]->has_tangent) {
+    const MatX<Sym>& dtau = call.args[2]->d;
+    for (Eigen::Index c = 0; c < dtau.cols(); ++c) {
+      Eigen::Index entries = 0;
+      for (Eigen::Index r = 0; r < dtau.rows(); ++r) entries += isZero(dtau(r, c)) ? 0 : 1;
+      (entries == 1 ? selected : rhs).col(c) += dtau.col(c);
+      any_selected = any_selected || entries == 1;
+    }
+  }
   out.d = solveWithMassFactors(model, t.mass_factors, rhs);
+  if (any_selected) addSparse(out.d, sparseProduct(inverseFromFactors(dofParents(model), t.mass_factors), selected));
   return out;
 }
 

@@ -18,7 +18,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.7";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.8";
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
