@@ -522,6 +522,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     detail::LoweringOptions lo;
     lo.split_threshold = options.split_threshold;
     lo.reuse_slots = options.reuse_temporaries;
+    lo.output_order_from = options.output_order_from;
     const LoweredFunction lowered = detail::lower(graph, f, lo);
     const std::string prefix = "rd_" + f.name;
     const std::uint32_t parts = static_cast<std::uint32_t>(lowered.chunks.size());

@@ -5,6 +5,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "emission_order.hpp"
 #include "sum_chains.hpp"
 
 namespace robodiff::codegen::detail {
@@ -146,6 +147,16 @@ class Lowerer {
     std::reverse(prologue_.begin(), prologue_.end());
   }
 
+  // The trace's order, or output by output for a large function (emission_order.hpp).
+  std::vector<NodeId> computeOrder() const {
+    std::uint32_t operations = 0;
+    for (NodeId id = 0; id < n_; ++id) operations += needed_[id] && isComputed(id) ? 1 : 0;
+    if (options_.output_order_from > 0 && operations >= options_.output_order_from) return outputConeOrder(g_, f_);
+    std::vector<NodeId> trace(n_);
+    for (NodeId id = 0; id < n_; ++id) trace[id] = id;
+    return trace;
+  }
+
   void schedule() {
     std::unordered_map<NodeId, NodeId> sin_of, cos_of;  // argument -> node
     for (NodeId id = 0; id < n_; ++id) {
@@ -165,7 +176,7 @@ class Lowerer {
     order.reserve(needed_count_);
     for (NodeId id = 0; id < n_; ++id)
       if (needed_[id] && isCall(id) && g_.node(g_.node(id).args[0]).op == Op::Input) order.push_back(id);
-    for (NodeId id = 0; id < n_; ++id)
+    for (NodeId id : computeOrder())
       if (needed_[id] && !(isCall(id) && g_.node(g_.node(id).args[0]).op == Op::Input)) order.push_back(id);
     std::vector<char> done(n_, 0);
     std::uint32_t ops_in_chunk = 0;

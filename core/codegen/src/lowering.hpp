@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/codegen/function_definition.hpp"
 #include "robodiff/symbolic/graph.hpp"
 
@@ -80,6 +81,9 @@ struct LoweringOptions {
   std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk
   bool reuse_slots = true;            // false: every value gets a fresh slot (SSA form)
   bool chain_sums = true;             // false: sums as the graph associates them
+  // From this many operations on, values are computed output by output (emission_order.hpp)
+  // instead of in the trace's order; 0: never.
+  std::uint32_t output_order_from = kOutputOrderFrom;
 };
 
 // Expects a definition that passed validate(graph).

@@ -18,7 +18,13 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.8";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.9";
+
+// Functions of at least this many operations compute their values output by output,
+// not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
+// the free-flying Talos's ABA + J (123k operations) and Euler step + J (137k) ran 11% and
+// 21% faster so, seven functions of 1k-50k operations 4-15% slower.
+inline constexpr std::uint32_t kOutputOrderFrom = 100000;
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
@@ -32,6 +38,8 @@ struct CodegenOptions {
   // 1: no SIMD variant, eval_batch loops over eval (also what compilers without GNU
   // vector extensions, such as tcc, always get); else 2, 4, 8 or 16 lanes.
   std::uint32_t batch_width = 0;
+  // Operations from which values are computed output by output; 0: always the trace's order.
+  std::uint32_t output_order_from = kOutputOrderFrom;
 };
 
 struct SourceFile {
