@@ -175,9 +175,24 @@ Value<Sym> rneaRule(const PrimitiveCall& call) {
   return out;
 }
 
+// Adds tau's tangent `dtau` to `rhs`, the columns with one entry (a torque input's own
+// tangent block) to `selected` instead; whether any went there.
+bool splitTorqueTangent(const MatX<Sym>& dtau, MatX<Sym>& rhs, MatX<Sym>& selected) {
+  bool any_selected = false;
+  for (Eigen::Index c = 0; c < dtau.cols(); ++c) {
+    Eigen::Index entries = 0;
+    for (Eigen::Index r = 0; r < dtau.rows(); ++r) entries += isZero(dtau(r, c)) ? 0 : 1;
+    (entries == 1 ? selected : rhs).col(c) += dtau.col(c);
+    any_selected = any_selected || entries == 1;
+  }
+  return any_selected;
+}
+
 // aba: ddq = M^-1 (tau - nle); its tangent M^-1 (d tau - R_q dq - R_v dv), R the RNEA
 // partials at a = ddq, by solves with M's tree factors; ddq, R and the factors from one
-// sweep (dynamics/aba_derivatives.hpp; R goes unused without q or v tangents).
+// sweep (dynamics/aba_derivatives.hpp; R goes unused without q or v tangents). tau's
+// single-entry tangent columns take M^-1's columns instead, each symmetric pair computed
+// once (inverseFromFactors), where solving would compute M^-1(r, c) and M^-1(c, r) apart.
 Value<Sym> abaRule(const PrimitiveCall& call) {
   const Model& model = call.context.model;
   Data<Sym> data(model);
@@ -187,20 +202,8 @@ Value<Sym> abaRule(const PrimitiveCall& call) {
   MatX<Sym> rhs = MatX<Sym>::Zero(model.nv, out.d.cols());
   chain(rhs, MatX<Sym>(-t.dtau_dq), *call.args[0]);
   chain(rhs, MatX<Sym>(-t.dtau_dv), *call.args[1]);
-  // tau's tangent columns with one entry (u's own tangent block) take columns of M^-1, each
-  // pair computed once by symmetry (inverseFromFactors); solving for them would compute
-  // both M^-1(r, c) and M^-1(c, r). Denser columns join the solve.
   MatX<Sym> selected = MatX<Sym>::Zero(model.nv, out.d.cols());
-  bool any_selected = false;
-  if (call.args[2]->has_tangent) {
-    const MatX<Sym>& dtau = call.args[2]->d;
-    for (Eigen::Index c = 0; c < dtau.cols(); ++c) {
-      Eigen::Index entries = 0;
-      for (Eigen::Index r = 0; r < dtau.rows(); ++r) entries += isZero(dtau(r, c)) ? 0 : 1;
-      (entries == 1 ? selected : rhs).col(c) += dtau.col(c);
-      any_selected = any_selected || entries == 1;
-    }
-  }
+  const bool any_selected = call.args[2]->has_tangent && splitTorqueTangent(call.args[2]->d, rhs, selected);
   out.d = solveWithMassFactors(model, t.mass_factors, rhs);
   if (any_selected) addSparse(out.d, sparseProduct(inverseFromFactors(dofParents(model), t.mass_factors), selected));
   return out;
