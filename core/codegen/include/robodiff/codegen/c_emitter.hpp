@@ -18,13 +18,13 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.9";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.10";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
-// the free-flying Talos's ABA + J (123k operations) and Euler step + J (137k) ran 11% and
-// 21% faster so, seven functions of 1k-50k operations 4-15% slower.
-inline constexpr std::uint32_t kOutputOrderFrom = 100000;
+// four functions of the free-flying Talos of 72k-137k operations ran 7-21% faster so,
+// seven functions of 1k-47k operations 4-15% slower.
+inline constexpr std::uint32_t kOutputOrderFrom = 60000;
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
