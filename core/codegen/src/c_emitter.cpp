@@ -65,6 +65,15 @@ std::string prologue(const CodegenOptions& options) {
        "#define RD_ZERO4(p) do { const rd_zero4 rd_z = {0.0, 0.0, 0.0, 0.0}; memcpy((p), &rd_z, sizeof rd_z); } while (0)\n"
        "#else\n"
        "#define RD_ZERO4(p) do { double* rd_p = (p); rd_p[0] = rd_p[1] = rd_p[2] = rd_p[3] = 0.0; } while (0)\n"
+       "#endif\n"
+       "/* Lane pairs: two isomorphic operations of single-knot code in the lanes of one\n"
+       "   128-bit vector (docs/code-generation.md). Compilers without GNU vector extensions\n"
+       "   compile the single-knot code without pairs. */\n"
+       "#if defined(__GNUC__) && !defined(__TINYC__)\n"
+       "#define RD_PAIRS 1\n"
+       "typedef double rd_pair __attribute__((vector_size(16)));\n"
+       "#else\n"
+       "#define RD_PAIRS 0\n"
        "#endif\n\n"
        "/* RD_W knots per SIMD chunk of the batched entry point (GNU vector extensions). */\n";
   if (options.batch_width == 1) {
@@ -194,6 +203,7 @@ class ChunkPrinter {
   std::string print(const std::string& signature, const Chunk& chunk, bool first = false) {
     out_.str("");
     declared_.assign(chunk.slots, 0);
+    declared_pair_.assign(chunk.pair_slots, 0);
     std::set<std::uint32_t> in_blocks, out_blocks, zeroed, claimed;
     bool uses_work = false;
     for (const Instr& ins : chunk.code) {
@@ -235,6 +245,14 @@ class ChunkPrinter {
   }
   const char* type() const { return vector() ? "rd_v" : "double"; }
 
+  // "rd_pair p3 = " the first time a pair local is assigned, "p3 = " after.
+  std::string assignPair(std::uint32_t slot) {
+    std::string lhs = cat("p", std::to_string(slot), " = ");
+    if (declared_pair_[slot]) return lhs;
+    declared_pair_[slot] = 1;
+    return "rd_pair " + lhs;
+  }
+
   // "double t3 = " the first time a local is assigned in this function, "t3 = " after.
   std::string assign(std::uint32_t slot) {
     std::string lhs = localName(slot) + " = ";
@@ -249,6 +267,10 @@ class ChunkPrinter {
     switch (o.kind) {
       case Operand::Kind::Slot:
         return cat(o.negated ? "-" : "", localName(o.slot));
+      case Operand::Kind::Lane:
+        return cat(o.negated ? "-" : "", "p", std::to_string(o.slot), "[", std::to_string(o.lane), "]");
+      case Operand::Kind::Pair:
+        return cat(o.negated ? "-" : "", "p", std::to_string(o.slot));
       case Operand::Kind::Constant: {
         std::string lit = cDoubleLiteral(o.value);
         return vector() && helper_argument ? "rd_splat(" + lit + ")" : lit;
@@ -346,6 +368,13 @@ class ChunkPrinter {
       case InstrKind::Compute:
         out_ << "  " << assign(ins.dst) << expression(ins) << ";\n";
         break;
+      case InstrKind::PackPair:
+        out_ << "  " << assignPair(ins.dst) << "(rd_pair){" << operand(ins.args[0]) << ", " << operand(ins.args[1])
+             << "};\n";
+        break;
+      case InstrKind::ComputePair:
+        out_ << "  " << assignPair(ins.dst) << expression(ins) << ";\n";
+        break;
       case InstrKind::SinCos:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {
           if (declared_[slot]) continue;
@@ -378,7 +407,7 @@ class ChunkPrinter {
   const FunctionDefinition& f_;
   Flavour flavour_;
   std::ostringstream out_;
-  std::vector<char> declared_;
+  std::vector<char> declared_, declared_pair_;
 };
 
 const char* kEvalParams = "(const double* const* in, double* const* out, double* w)";
@@ -523,7 +552,15 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     lo.split_threshold = options.split_threshold;
     lo.reuse_slots = options.reuse_temporaries;
     lo.output_order_from = options.output_order_from;
+    if (options.lane_pairs) lo.lane_pairs = detail::LanePairMode::Order;
     const LoweredFunction lowered = detail::lower(graph, f, lo);
+    LoweredFunction paired;
+    if (options.lane_pairs) {
+      lo.lane_pairs = detail::LanePairMode::Emit;
+      paired = detail::lower(graph, f, lo);
+      if (paired.chunks.size() != lowered.chunks.size() || paired.transfer_slots != lowered.transfer_slots)
+        throw std::logic_error("c_emitter: the lowering with lane pairs changed the parts");
+    }
     const std::string prefix = "rd_" + f.name;
     const std::uint32_t parts = static_cast<std::uint32_t>(lowered.chunks.size());
 
@@ -534,14 +571,21 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     info.sincos_pairs = lowered.sincos_pairs;
     info.parts = parts;
     info.transfer_slots = lowered.transfer_slots;
+    info.lane_pairs = paired.lane_pairs;
     for (const Chunk& c : lowered.chunks) info.max_locals = std::max(info.max_locals, c.slots);
     lib.functions.push_back(info);
 
     ChunkPrinter scalar(f, Flavour::Scalar), vector(f, Flavour::Vector);
+    // The single-knot code of part p: with lane pairs where the compiler has vector types.
+    auto scalarPart = [&](const std::string& signature, std::uint32_t p) {
+      if (paired.lane_pairs == 0) return scalar.print(signature, lowered.chunks[p]);
+      return "#if RD_PAIRS\n" + scalar.print(signature, paired.chunks[p]) + "#else\n" +
+             scalar.print(signature, lowered.chunks[p]) + "#endif\n";
+    };
     const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
     main << "/* ---- " << f.name << ": " << lowered.operations << " operations, " << parts << " part(s) ---- */\n\n";
     if (parts == 1) {
-      main << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0]) << "\n";
+      main << scalarPart("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, 0) << "\n";
       if (batched)
         main << "#if RD_VECTOR\n" << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
              << "#endif\n\n";
@@ -550,7 +594,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
         const std::string part = prefix + "_p" + std::to_string(p);
         std::ostringstream file;
         file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
-             << scalar.print("RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, lowered.chunks[p])
+             << scalarPart("RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, p)
              << "\n";
         if (batched)
           file << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"

@@ -92,6 +92,9 @@ class Assembler {
       case InstrKind::LoadTransfer:
       case InstrKind::StoreTransfer:
         throw std::logic_error("interpreter: a split function");
+      case InstrKind::PackPair:
+      case InstrKind::ComputePair:
+        throw std::logic_error("interpreter: lane pairs");
     }
   }
 

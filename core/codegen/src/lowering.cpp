@@ -6,6 +6,8 @@
 #include <unordered_map>
 
 #include "emission_order.hpp"
+#include "lane_pairs.hpp"
+#include "operand_ref.hpp"
 #include "sum_chains.hpp"
 
 namespace robodiff::codegen::detail {
@@ -17,58 +19,6 @@ using symbolic::Op;
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-// A node as its consumers read it: a constant, or a computed/input node, maybe negated.
-struct Ref {
-  bool is_constant = false;
-  double value = 0.0;
-  NodeId base = 0;
-  bool negated = false;
-};
-
-// Neg nodes and products with the constant -1 are read through: they are operand flags.
-bool isNegation(const Graph& g, const Node& n, NodeId* operand) {
-  if (n.op == Op::Neg) {
-    *operand = n.args[0];
-    return true;
-  }
-  if (n.op == Op::Mul) {
-    if (g.isConstant(n.args[0], -1.0)) {
-      *operand = n.args[1];
-      return true;
-    }
-    if (g.isConstant(n.args[1], -1.0)) {
-      *operand = n.args[0];
-      return true;
-    }
-  }
-  return false;
-}
-
-Ref resolve(const Graph& g, NodeId id) {
-  Ref r;
-  NodeId operand;
-  while (isNegation(g, g.node(id), &operand)) {
-    r.negated = !r.negated;
-    id = operand;
-  }
-  const Node& n = g.node(id);
-  if (n.op == Op::Constant) {
-    r.is_constant = true;
-    r.value = r.negated ? -n.value : n.value;
-    r.negated = false;
-  } else {
-    r.base = id;
-  }
-  return r;
-}
-
-// One step of the schedule: a node computed, or a sin/cos pair computed together.
-struct Step {
-  NodeId first;
-  NodeId second = kNone;  // the cos of a SinCos pair (first is then the sin)
-  std::uint32_t chunk = 0;
-};
-
 struct OutputEntry {
   std::uint32_t block, index;
   bool negated;
@@ -78,7 +28,7 @@ struct OutputEntry {
 class Lowerer {
  public:
   Lowerer(const Graph& g, const FunctionDefinition& f, const LoweringOptions& o)
-      : g_(g), f_(f), options_(o), n_(g.size()) {}
+      : g_(g), f_(f), options_(o), n_(g.size()), pairs_(g.size()) {}
 
   LoweredFunction run() {
     markNeeded();
@@ -94,6 +44,7 @@ class Lowerer {
     out.needed_nodes = needed_count_;
     for (const Chunk& c : out.chunks) out.operations += c.operations;
     out.sincos_pairs = sincos_pairs_;
+    out.lane_pairs = static_cast<std::uint32_t>(pairs_.count());
     return out;
   }
 
@@ -179,8 +130,6 @@ class Lowerer {
     for (NodeId id : computeOrder())
       if (needed_[id] && !(isCall(id) && g_.node(g_.node(id).args[0]).op == Op::Input)) order.push_back(id);
     std::vector<char> done(n_, 0);
-    std::uint32_t ops_in_chunk = 0;
-    chunk_count_ = 1;
     for (NodeId id : order) {
       if (done[id] || !isComputed(id)) continue;
       const Node& n = g_.node(id);
@@ -195,16 +144,61 @@ class Lowerer {
           ++sincos_pairs_;
         }
       }
-      std::uint32_t ops = s.second == kNone ? 1 : 2;
+      done[id] = 1;
+      steps_.push_back(s);
+    }
+    if (options_.lane_pairs != LanePairMode::Off) pairSteps();
+    assignChunks();
+    if (options_.lane_pairs == LanePairMode::Order) splitPairs();
+  }
+
+  // Chunks of at most split_threshold operations, in the order of the steps.
+  void assignChunks() {
+    std::uint32_t ops_in_chunk = 0;
+    chunk_count_ = 1;
+    for (Step& s : steps_) {
+      const std::uint32_t ops = s.second == kNone && s.lane1 == kNone ? 1 : 2;
       if (options_.split_threshold > 0 && ops_in_chunk > 0 && ops_in_chunk + ops > options_.split_threshold) {
         ++chunk_count_;
         ops_in_chunk = 0;
       }
       ops_in_chunk += ops;
       s.chunk = chunk_count_ - 1;
-      done[id] = 1;
-      steps_.push_back(s);
     }
+  }
+
+  // Lane pairs (lane_pairs.hpp), the steps reordered so that each pair is one step. In
+  // LanePairMode::Order each pair becomes two steps again once the chunks are cut, so
+  // that the code without pairs has the same parts and work buffer as the code with them.
+  void pairSteps() {
+    std::uint32_t operations = 0;
+    std::vector<std::uint32_t> pairable(n_, kNoPair);
+    for (const Step& s : steps_) {
+      operations += s.second == kNone ? 1 : 2;
+      if (s.second == kNone) pairable[s.first] = 0;
+    }
+    if (operations >= kLanePairsBelow) return;
+    pairs_ = chooseLanePairs(g_, f_, pairable);
+    auto coverageTooLow = [&] { return 2.0 * static_cast<double>(pairs_.count()) < kLanePairCoverage * operations; };
+    if (pairs_.count() == 0 || coverageTooLow()) {
+      pairs_ = LanePairs(n_);
+      return;
+    }
+    std::vector<Step> ordered = orderWithPairs(g_, steps_, pairs_);
+    if (coverageTooLow()) pairs_ = LanePairs(n_);
+    else steps_ = std::move(ordered);
+  }
+
+  // Each pair step as two steps, one after the other, in the pair's chunk.
+  void splitPairs() {
+    std::vector<Step> steps;
+    steps.reserve(steps_.size() + pairs_.count());
+    for (const Step& s : steps_) {
+      steps.push_back(Step{s.first, s.second, kNone, s.chunk});
+      if (s.lane1 != kNone) steps.push_back(Step{s.lane1, kNone, kNone, s.chunk});
+    }
+    steps_ = std::move(steps);
+    pairs_ = LanePairs(n_);
   }
 
   // For each value needed by a later chunk than its own: a transfer slot of the work
@@ -212,12 +206,15 @@ class Lowerer {
   void assignTransfers() {
     last_chunk_use_.assign(n_, kNone);
     for (const Step& s : steps_) {
-      const Node& n = g_.node(s.first);
-      for (int a = 0; a < symbolic::arity(n.op); ++a) {
-        Ref r = resolve(g_, n.args[a]);
-        if (r.is_constant) continue;
-        std::uint32_t& last = last_chunk_use_[r.base];
-        if (last == kNone || s.chunk > last) last = s.chunk;
+      for (NodeId id : {s.first, s.lane1}) {
+        if (id == kNone) continue;
+        const Node& n = g_.node(id);
+        for (int a = 0; a < symbolic::arity(n.op); ++a) {
+          Ref r = resolve(g_, n.args[a]);
+          if (r.is_constant) continue;
+          std::uint32_t& last = last_chunk_use_[r.base];
+          if (last == kNone || s.chunk > last) last = s.chunk;
+        }
       }
     }
     transfer_slot_.assign(n_, kNone);
@@ -230,7 +227,7 @@ class Lowerer {
         current = s.chunk;
         for (std::uint32_t slot : release_at[current]) free_slots.push_back(slot);
       }
-      for (NodeId d : {s.first, s.second}) {
+      for (NodeId d : {s.first, s.lane1, s.second}) {
         if (d == kNone || last_chunk_use_[d] == kNone || last_chunk_use_[d] <= s.chunk) continue;
         std::uint32_t slot;
         if (!free_slots.empty()) {
@@ -310,64 +307,169 @@ class Lowerer {
       last_read_chunk_.assign(n_, kNone);
       local_chunk_.assign(n_, kNone);
       local_slot_.assign(n_, 0);
+      local_lane_.assign(n_, kScalar);
     }
     free_.clear();
+    free_pairs_.clear();
     next_slot_ = 0;
+    next_pair_slot_ = 0;
     auto begin = std::lower_bound(steps_.begin(), steps_.end(), c, [](const Step& s, std::uint32_t v) { return s.chunk < v; });
     auto end = std::upper_bound(begin, steps_.end(), c, [](std::uint32_t v, const Step& s) { return v < s.chunk; });
     // Last position (step offset) in this chunk where each value is read.
-    for (auto it = begin; it != end; ++it) {
-      const Node& n = g_.node(it->first);
-      for (int a = 0; a < symbolic::arity(n.op); ++a) {
-        Ref r = resolve(g_, n.args[a]);
-        if (r.is_constant) continue;
-        last_read_[r.base] = static_cast<std::uint32_t>(it - begin);
-        last_read_chunk_[r.base] = c;
+    for (auto it = begin; it != end; ++it)
+      for (NodeId id : {it->first, it->lane1}) {
+        if (id == kNone) continue;
+        const Node& n = g_.node(id);
+        for (int a = 0; a < symbolic::arity(n.op); ++a) {
+          Ref r = resolve(g_, n.args[a]);
+          if (r.is_constant) continue;
+          last_read_[r.base] = static_cast<std::uint32_t>(it - begin);
+          last_read_chunk_[r.base] = c;
+        }
       }
-    }
-    auto lastRead = [&](NodeId id) { return last_read_chunk_[id] == c ? last_read_[id] : kNone; };
-
+    chunk_ = c;
     for (auto it = begin; it != end; ++it) {
       const std::uint32_t pos = static_cast<std::uint32_t>(it - begin);
-      const Node& n = g_.node(it->first);
-      Instr ins;
-      ins.kind = it->second == kNone ? InstrKind::Compute : InstrKind::SinCos;
-      ins.op = n.op;
-      NodeId dying[3];
-      int n_dying = 0;
-      for (int a = 0; a < symbolic::arity(n.op); ++a) {
-        Ref r = resolve(g_, n.args[a]);
-        Operand& o = ins.args[a];
-        if (r.is_constant) {
-          o.kind = Operand::Kind::Constant;
-          o.value = r.value;
-          continue;
-        }
-        if (local_chunk_[r.base] != c) load(c, r.base, chunk);
-        o.kind = Operand::Kind::Slot;
-        o.slot = local_slot_[r.base];
-        o.negated = r.negated;
-        if (lastRead(r.base) == pos && std::find(dying, dying + n_dying, r.base) == dying + n_dying)
-          dying[n_dying++] = r.base;
-      }
-      for (int d = 0; d < n_dying; ++d) release(local_slot_[dying[d]]);
-      ins.dst = define(c, it->first);
-      if (it->second != kNone) ins.dst2 = define(c, it->second);
-      chunk.code.push_back(ins);
-      ++chunk.operations;
-      for (NodeId d : {it->first, it->second}) {
-        if (d == kNone) continue;
-        afterDefinition(d, chunk);
-        // A value with no later reader in this chunk is dead at once.
-        if (lastRead(d) == kNone) release(local_slot_[d]);
-      }
+      if (it->lane1 == kNone) emitStep(pos, *it, chunk);
+      else emitPairStep(pos, *it, chunk);
     }
     chunk.slots = next_slot_;
+    chunk.pair_slots = next_pair_slot_;
+  }
+
+  std::uint32_t lastRead(NodeId id) const { return last_read_chunk_[id] == chunk_ ? last_read_[id] : kNone; }
+
+  // An operand as a scalar read: a constant, a local, or a lane of a pair local (loaded
+  // first from the inputs or the work buffer if this chunk has not seen it yet).
+  Operand scalarOperand(const Ref& r, Chunk& chunk) {
+    Operand o;
+    if (r.is_constant) {
+      o.kind = Operand::Kind::Constant;
+      o.value = r.value;
+      return o;
+    }
+    if (local_chunk_[r.base] != chunk_) load(chunk_, r.base, chunk);
+    o = localOperand(r.base);
+    o.negated = r.negated;
+    return o;
+  }
+  Operand localOperand(NodeId id) const {
+    Operand o;
+    o.slot = local_slot_[id];
+    if (local_lane_[id] != kScalar) {
+      o.kind = Operand::Kind::Lane;
+      o.lane = local_lane_[id];
+    }
+    return o;
+  }
+
+  // Values whose last reader is the step at `pos` give up their locals.
+  void releaseDying(std::uint32_t pos, std::initializer_list<NodeId> readers) {
+    NodeId dying[6];
+    int n_dying = 0;
+    for (NodeId id : readers) {
+      if (id == kNone) continue;
+      const Node& n = g_.node(id);
+      for (int a = 0; a < symbolic::arity(n.op); ++a) {
+        Ref r = resolve(g_, n.args[a]);
+        if (!r.is_constant && lastRead(r.base) == pos && std::find(dying, dying + n_dying, r.base) == dying + n_dying)
+          dying[n_dying++] = r.base;
+      }
+    }
+    for (int d = 0; d < n_dying; ++d) kill(dying[d]);
+  }
+  void kill(NodeId id) {
+    if (local_lane_[id] == kScalar) release(local_slot_[id]);
+    else if (--pair_live_[local_slot_[id]] == 0) releasePair(local_slot_[id]);
+  }
+
+  void emitStep(std::uint32_t pos, const Step& step, Chunk& chunk) {
+    const Node& n = g_.node(step.first);
+    Instr ins;
+    ins.kind = step.second == kNone ? InstrKind::Compute : InstrKind::SinCos;
+    ins.op = n.op;
+    for (int a = 0; a < symbolic::arity(n.op); ++a) ins.args[a] = scalarOperand(resolve(g_, n.args[a]), chunk);
+    releaseDying(pos, {step.first});
+    ins.dst = define(chunk_, step.first);
+    if (step.second != kNone) ins.dst2 = define(chunk_, step.second);
+    chunk.code.push_back(ins);
+    ++chunk.operations;
+    for (NodeId d : {step.first, step.second}) {
+      if (d == kNone) continue;
+      afterDefinition(d, chunk);
+      if (lastRead(d) == kNone) kill(d);  // no later reader in this chunk: dead at once
+    }
+  }
+
+  // Two isomorphic operations in the lanes of one pair local. An operand already in a
+  // pair local's lanes in this order is read as it is; any other is packed first.
+  void emitPairStep(std::uint32_t pos, const Step& step, Chunk& chunk) {
+    const NodeId a = step.first, b = step.lane1;
+    const bool swapped = pairs_.swapped(b);
+    Instr ins;
+    ins.kind = InstrKind::ComputePair;
+    ins.op = g_.node(a).op;
+    std::uint32_t packed[3];
+    int n_packed = 0;
+    for (int k = 0; k < symbolic::arity(ins.op); ++k) {
+      const Ref x = resolve(g_, g_.node(a).args[k]);
+      const Ref y = resolve(g_, g_.node(b).args[swapped ? 1 - k : k]);
+      Operand& o = ins.args[k];
+      o.kind = Operand::Kind::Pair;
+      if (inLanes(x, y)) {
+        o.slot = local_slot_[x.base];
+        o.negated = x.negated;
+        continue;
+      }
+      Instr pack;
+      pack.kind = InstrKind::PackPair;
+      pack.args[0] = scalarOperand(x, chunk);
+      pack.args[1] = scalarOperand(y, chunk);
+      pack.dst = o.slot = allocatePair();
+      packed[n_packed++] = pack.dst;
+      chunk.code.push_back(pack);
+    }
+    releaseDying(pos, {a, b});
+    for (int p = 0; p < n_packed; ++p) releasePair(packed[p]);
+    ins.dst = allocatePair();
+    pair_live_[ins.dst] = 2;
+    for (NodeId d : {a, b}) {
+      local_chunk_[d] = chunk_;
+      local_slot_[d] = ins.dst;
+      local_lane_[d] = d == a ? 0 : 1;
+    }
+    chunk.code.push_back(ins);
+    chunk.operations += 2;
+    for (NodeId d : {a, b}) {
+      afterDefinition(d, chunk);
+      if (lastRead(d) == kNone) kill(d);
+    }
+  }
+
+  // x in lane 0 and y in lane 1 of one pair local of this chunk, with one sign.
+  bool inLanes(const Ref& x, const Ref& y) const {
+    if (x.is_constant || y.is_constant || x.negated != y.negated || x.base == y.base) return false;
+    return local_chunk_[x.base] == chunk_ && local_chunk_[y.base] == chunk_ && local_lane_[x.base] == 0 &&
+           local_lane_[y.base] == 1 && local_slot_[x.base] == local_slot_[y.base];
+  }
+
+  std::uint32_t allocatePair() {
+    if (options_.reuse_slots && !free_pairs_.empty()) {
+      std::uint32_t s = free_pairs_.back();
+      free_pairs_.pop_back();
+      return s;
+    }
+    if (next_pair_slot_ >= pair_live_.size()) pair_live_.resize(next_pair_slot_ + 1, 0);
+    return next_pair_slot_++;
+  }
+  void releasePair(std::uint32_t slot) {
+    if (options_.reuse_slots) free_pairs_.push_back(slot);
   }
 
   std::uint32_t define(std::uint32_t c, NodeId id) {
     local_chunk_[id] = c;
     local_slot_[id] = allocate();
+    local_lane_[id] = kScalar;
     return local_slot_[id];
   }
 
@@ -395,7 +497,7 @@ class Lowerer {
       st.kind = InstrKind::StoreOutput;
       st.block = out_entries_[e].block;
       st.index = out_entries_[e].index;
-      st.args[0].slot = local_slot_[d];
+      st.args[0] = localOperand(d);
       st.args[0].negated = out_entries_[e].negated;
       chunk.code.push_back(st);
     }
@@ -403,7 +505,7 @@ class Lowerer {
       Instr st;
       st.kind = InstrKind::StoreTransfer;
       st.index = transfer_slot_[d];
-      st.args[0].slot = local_slot_[d];
+      st.args[0] = localOperand(d);
       chunk.code.push_back(st);
     }
   }
@@ -430,10 +532,15 @@ class Lowerer {
   std::vector<std::uint32_t> last_chunk_use_, transfer_slot_;
   std::uint32_t transfer_slots_ = 0;
 
+  LanePairs pairs_;
+
   // Per chunk being emitted.
+  static constexpr std::uint8_t kScalar = 2;  // local_lane_: a scalar local, not a lane
+  std::uint32_t chunk_ = 0;
   std::vector<std::uint32_t> last_read_, last_read_chunk_, local_chunk_, local_slot_;
-  std::vector<std::uint32_t> free_;
-  std::uint32_t next_slot_ = 0;
+  std::vector<std::uint8_t> local_lane_;
+  std::vector<std::uint32_t> free_, free_pairs_, pair_live_;
+  std::uint32_t next_slot_ = 0, next_pair_slot_ = 0;
 };
 
 }  // namespace

@@ -16,6 +16,8 @@
 //  - inputs are loaded where first used, outputs are stored right after their value is
 //    computed, so a value's slot is free once its last consumer has run;
 //  - slots are reused by liveness (a free list), keeping the working set small;
+//  - optionally (single-knot C only) isomorphic operations are computed in pairs, in the
+//    two lanes of a 128-bit vector (lane_pairs.hpp);
 //  - optionally the instruction list is cut into chunks of bounded size (one per
 //    translation unit); a value used by a later chunk goes through the work buffer
 //    ("transfer" slots, also reused once their last reader is done).
@@ -31,10 +33,13 @@
 namespace robodiff::codegen::detail {
 
 struct Operand {
-  enum class Kind : std::uint8_t { Slot, Constant, Input };
+  // Slot: a scalar local; Lane: one lane of a pair local; Pair: a pair local (the
+  // operands of ComputePair only).
+  enum class Kind : std::uint8_t { Slot, Constant, Input, Lane, Pair };
   Kind kind = Kind::Slot;
-  bool negated = false;            // Slot and Input only; a Constant carries its sign
-  std::uint32_t slot = 0;          // Slot
+  bool negated = false;            // all but Constant; a Constant carries its sign
+  std::uint8_t lane = 0;           // Lane
+  std::uint32_t slot = 0;          // Slot, Lane, Pair
   double value = 0.0;              // Constant
   std::uint32_t block = 0, index = 0;  // Input (only in output copies: out = +-in)
 };
@@ -47,6 +52,8 @@ enum class InstrKind : std::uint8_t {
   StoreOutput,    // out[block][index] = args[0]
   StoreTransfer,  // work[index] = args[0]
   ZeroOutput,     // out[block] = 0 on the runs chunk.zero_runs[index] (before the block's other stores)
+  PackPair,       // pair dst = {args[0], args[1]} (two scalar operands)
+  ComputePair,    // pair dst = op(args), lane by lane (Pair operands)
 };
 
 struct Instr {
@@ -66,6 +73,7 @@ struct Chunk {
   std::vector<Instr> code;
   std::vector<std::vector<ZeroRun>> zero_runs;  // per ZeroOutput (its index), ascending
   std::uint32_t slots = 0;       // local slots used (highest slot + 1)
+  std::uint32_t pair_slots = 0;  // pair locals used
   std::uint32_t operations = 0;  // Compute + SinCos instructions
 };
 
@@ -75,7 +83,20 @@ struct LoweredFunction {
   std::uint32_t needed_nodes = 0;   // graph nodes the outputs reach (constants and inputs included)
   std::uint32_t operations = 0;
   std::uint32_t sincos_pairs = 0;
+  std::uint32_t lane_pairs = 0;     // ComputePair instructions
 };
+
+// Lane pairs (lane_pairs.hpp): Off; Order: the pairs' order without pairs (the code
+// both flavours of a C library share parts and work buffer with); Emit: the pairs too.
+enum class LanePairMode : std::uint8_t { Off, Order, Emit };
+
+// Functions of this many operations and more get no lane pairs (the output order's
+// large Jacobians, where they were not measured).
+inline constexpr std::uint32_t kLanePairsBelow = kOutputOrderFrom;
+// Lane pairs are kept where they compute at least this share of the operations. Measured
+// (docs/code-generation.md): the value functions of symmetric robots with 49-80% in pairs
+// ran 1.1-2x faster; Jacobians and steps with 14-24% ran up to 1.15x slower.
+inline constexpr double kLanePairCoverage = 0.3;
 
 struct LoweringOptions {
   std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk
@@ -84,6 +105,7 @@ struct LoweringOptions {
   // From this many operations on, values are computed output by output (emission_order.hpp)
   // instead of in the trace's order; 0: never.
   std::uint32_t output_order_from = kOutputOrderFrom;
+  LanePairMode lane_pairs = LanePairMode::Off;
 };
 
 // Expects a definition that passed validate(graph).

@@ -18,7 +18,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.3.10";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.0";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
@@ -40,6 +40,9 @@ struct CodegenOptions {
   std::uint32_t batch_width = 0;
   // Operations from which values are computed output by output; 0: always the trace's order.
   std::uint32_t output_order_from = kOutputOrderFrom;
+  // Single-knot code computes isomorphic operations in pairs, in the two lanes of a
+  // 128-bit vector (where the compiler has GNU vector extensions).
+  bool lane_pairs = true;
 };
 
 struct SourceFile {
@@ -56,6 +59,7 @@ struct GeneratedFunctionInfo {
   std::uint32_t max_locals = 0;      // most scalar locals of one part
   std::uint32_t parts = 1;           // translation units the body is spread over
   std::uint32_t transfer_slots = 0;  // work-buffer doubles (per lane) between parts
+  std::uint32_t lane_pairs = 0;      // pairs of operations computed together (single-knot code)
 };
 
 struct GeneratedLibrary {

@@ -1,0 +1,303 @@
+#include "lane_pairs.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <queue>
+#include <tuple>
+#include <unordered_map>
+
+#include "operand_ref.hpp"
+
+namespace robodiff::codegen::detail {
+namespace {
+
+using symbolic::Graph;
+using symbolic::NodeId;
+using symbolic::Op;
+
+// Depth of the match that ranks seeds, and the score a seed needs (about three
+// operations matching).
+constexpr int kSeedDepth = 4;
+constexpr double kSeedScore = 3.0;
+// Depth of the match that chooses between a commutative pair's two operand orders.
+constexpr int kOrderDepth = 3;
+// Rows of one column further apart than this are not tried as seeds.
+constexpr std::size_t kSeedWindow = 64;
+// A group of pairs is kept when it saves this many instructions more than its lane
+// shuffles cost.
+constexpr double kMinimumSaving = 16.0;
+
+bool isVectorOp(Op op) { return op == Op::Add || op == Op::Sub || op == Op::Mul || op == Op::Div; }
+
+class Chooser {
+ public:
+  Chooser(const Graph& g, const std::vector<std::uint32_t>& part_of) : g_(g), part_of_(part_of), pairs_(g.size()) {}
+
+  LanePairs run(const FunctionDefinition& f) {
+    seed(f);
+    prune();
+    return std::move(pairs_);
+  }
+
+ private:
+  Ref arg(NodeId n, int k) const { return resolve(g_, g_.node(n).args[k]); }
+  bool isFree(NodeId n) const { return part_of_[n] != kNoPair && isVectorOp(g_.node(n).op) && !pairs_.paired(n); }
+  bool matchable(NodeId a, NodeId b) const {
+    return a != b && isFree(a) && isFree(b) && g_.node(a).op == g_.node(b).op && part_of_[a] == part_of_[b];
+  }
+
+  // How far the expressions of two operands match: constants pair as a constant
+  // vector, one value read twice is a broadcast, different signs do not match.
+  double operandScore(const Ref& x, const Ref& y, int depth) const {
+    if (x.is_constant || y.is_constant) return x.is_constant && y.is_constant ? 0.5 : 0.0;
+    if (x.negated != y.negated) return 0.0;
+    if (x.base == y.base) return 0.5;
+    return score(x.base, y.base, depth);
+  }
+  double straightScore(NodeId a, NodeId b, int depth) const {
+    return operandScore(arg(a, 0), arg(b, 0), depth) + operandScore(arg(a, 1), arg(b, 1), depth);
+  }
+  double crossedScore(NodeId a, NodeId b, int depth) const {
+    if (!symbolic::isCommutative(g_.node(a).op)) return -1.0;
+    return operandScore(arg(a, 0), arg(b, 1), depth) + operandScore(arg(a, 1), arg(b, 0), depth);
+  }
+  double score(NodeId a, NodeId b, int depth) const {
+    if (depth == 0 || !matchable(a, b)) return 0.0;
+    return 1.0 + std::max(straightScore(a, b, depth - 1), crossedScore(a, b, depth - 1));
+  }
+
+  // Operand signs must agree lane by lane in the order the pair reads them.
+  bool signsAgree(NodeId a, NodeId b, bool crossed) const {
+    for (int k = 0; k < 2; ++k) {
+      const Ref x = arg(a, k), y = arg(b, crossed ? 1 - k : k);
+      if (!x.is_constant && !y.is_constant && x.negated != y.negated) return false;
+    }
+    return true;
+  }
+
+  // Pairs a and b, then their operands while they match (depth first).
+  void build(NodeId a, NodeId b) {
+    std::vector<std::pair<NodeId, NodeId>> stack{{a, b}};
+    while (!stack.empty()) {
+      const auto [x, y] = stack.back();
+      stack.pop_back();
+      if (!matchable(x, y)) continue;
+      const bool straight_ok = signsAgree(x, y, false);
+      const bool crossed_ok = symbolic::isCommutative(g_.node(x).op) && signsAgree(x, y, true);
+      if (!straight_ok && !crossed_ok) continue;
+      const bool crossed =
+          crossed_ok && (!straight_ok || crossedScore(x, y, kOrderDepth) > straightScore(x, y, kOrderDepth));
+      pairs_.pair(x, y, crossed);
+      for (int k = 1; k >= 0; --k) {
+        const Ref u = arg(x, k), v = arg(y, crossed ? 1 - k : k);
+        if (!u.is_constant && !v.is_constant) stack.push_back({u.base, v.base});
+      }
+    }
+  }
+
+  // Candidate seeds: output values of one column of a dense block (a value vector's
+  // entries; a Jacobian's derivatives of different entries along one direction), near
+  // each other, best matches first. Neighbouring columns of a Jacobian row share too
+  // much with scalar code: pairing them made the Panda's RNEA Jacobian 1.26x slower.
+  void seed(const FunctionDefinition& f) {
+    std::vector<std::tuple<double, NodeId, NodeId>> candidates;
+    for (const OutputBlock& block : f.outputs) {
+      if (block.kind != OutputKind::Dense || block.cols == 0) continue;
+      for (std::uint32_t c = 0; c < block.cols; ++c) {
+        std::vector<NodeId> values;
+        for (std::uint32_t r = 0; r < block.rows; ++r) {
+          const Ref ref = resolve(g_, block.values[r * block.cols + c]);
+          if (!ref.is_constant && isFree(ref.base)) values.push_back(ref.base);
+        }
+        for (std::size_t i = 0; i < values.size(); ++i)
+          for (std::size_t j = i + 1; j < values.size() && j <= i + kSeedWindow; ++j) {
+            const double s = score(values[i], values[j], kSeedDepth);
+            if (s >= kSeedScore) candidates.emplace_back(-s, values[i], values[j]);
+          }
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& x, const auto& y) { return std::get<0>(x) < std::get<0>(y); });
+    for (const auto& [s, a, b] : candidates) build(a, b);
+  }
+
+  // Extra instructions a pair's operand costs: none for a pair computed in the same
+  // lanes or two constants, a broadcast for one value read twice, else an insertion.
+  double operandCost(const Ref& x, const Ref& y) const {
+    if (x.is_constant && y.is_constant) return 0.0;
+    if (x.is_constant || y.is_constant || x.negated != y.negated) return 1.0;
+    if (x.base == y.base) return 0.5;
+    if (pairs_.paired(x.base) && pairs_.partner(x.base) == y.base && pairs_.lane(x.base) == 0) return 0.0;
+    return 1.0;
+  }
+
+  // Keeps the groups of connected pairs (a pair reading another as its operand) that
+  // save at least kMinimumSaving instructions: each pair saves one, each operand built
+  // from two scalars costs one, each lane 1 read by scalar code costs an extraction.
+  void prune() {
+    const NodeId n = static_cast<NodeId>(g_.size());
+    std::vector<char> scalar_reader(n, 0);
+    for (NodeId id = 0; id < n; ++id) {
+      if (part_of_[id] == kNoPair || pairs_.paired(id)) continue;
+      for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
+        const Ref r = arg(id, k);
+        if (!r.is_constant) scalar_reader[r.base] = 1;
+      }
+    }
+    std::vector<NodeId> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](NodeId x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::vector<double> saving(n, 0.0);
+    for (NodeId a = 0; a < n; ++a) {
+      if (!pairs_.paired(a) || pairs_.lane(a) != 0) continue;
+      const NodeId b = pairs_.partner(a);
+      double cost = scalar_reader[b] ? 1.0 : 0.0;
+      for (int k = 0; k < 2; ++k) {
+        const Ref x = arg(a, k), y = arg(b, pairs_.swapped(b) ? 1 - k : k);
+        cost += operandCost(x, y);
+        if (operandCost(x, y) == 0.0 && !x.is_constant) parent[find(x.base)] = find(a);
+      }
+      saving[a] = 1.0 - cost;
+    }
+    std::vector<double> group(n, 0.0);
+    for (NodeId a = 0; a < n; ++a)
+      if (pairs_.paired(a) && pairs_.lane(a) == 0) group[find(a)] += saving[a];
+    for (NodeId a = 0; a < n; ++a)
+      if (pairs_.paired(a) && pairs_.lane(a) == 0 && group[find(a)] < kMinimumSaving) pairs_.dissolve(a);
+  }
+
+  const Graph& g_;
+  const std::vector<std::uint32_t>& part_of_;
+  LanePairs pairs_;
+};
+
+// One attempt at ordering a part's steps with each pair as one unit; returns false
+// after dissolving a pair that could not be ordered.
+class PairOrder {
+ public:
+  PairOrder(const Graph& g, const std::vector<Step>& steps, LanePairs& pairs) : g_(g), steps_(steps), pairs_(pairs) {}
+
+  bool attempt(std::vector<Step>* out) {
+    makeUnits();
+    std::vector<std::vector<std::uint32_t>> readers(units_.size());
+    std::vector<std::uint32_t> waiting(units_.size(), 0);
+    for (std::uint32_t u = 0; u < units_.size(); ++u)
+      for (NodeId node : {units_[u].first, units_[u].second, units_[u].lane1}) {
+        if (node == kNoPair) continue;
+        for (int k = 0; k < symbolic::arity(g_.node(node).op); ++k) {
+          const Ref r = resolve(g_, g_.node(node).args[k]);
+          if (r.is_constant) continue;
+          auto it = unit_of_.find(r.base);
+          if (it == unit_of_.end()) continue;  // computed in an earlier part, or an input
+          if (it->second == u) {  // one member reads the other
+            pairs_.dissolve(units_[u].first);
+            return false;
+          }
+          readers[it->second].push_back(u);
+          ++waiting[u];
+        }
+      }
+    using Entry = std::pair<std::uint32_t, std::uint32_t>;  // (position, unit)
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<>> ready;
+    for (std::uint32_t u = 0; u < units_.size(); ++u)
+      if (waiting[u] == 0) ready.push({position_[u], u});
+    out->clear();
+    while (!ready.empty()) {
+      const std::uint32_t u = ready.top().second;
+      ready.pop();
+      out->push_back(units_[u]);
+      for (std::uint32_t r : readers[u])
+        if (--waiting[r] == 0) ready.push({position_[r], r});
+    }
+    if (out->size() == units_.size()) return true;
+    // A cycle through pairs: dissolve the earliest pair still waiting (after many
+    // attempts, every pair still waiting: the cost of a retry is the whole order).
+    std::uint32_t victim = kNoPair;
+    const bool all = ++attempts_ > kPatientAttempts;
+    for (std::uint32_t u = 0; u < units_.size(); ++u) {
+      if (waiting[u] == 0 || units_[u].lane1 == kNoPair) continue;
+      if (all) pairs_.dissolve(units_[u].first);
+      else if (victim == kNoPair || position_[u] < position_[victim]) victim = u;
+    }
+    if (!all) pairs_.dissolve(units_[victim].first);
+    return false;
+  }
+
+ private:
+  // A unit per step, the two steps of a pair merged at the later one's position.
+  void makeUnits() {
+    units_.clear();
+    position_.clear();
+    unit_of_.clear();
+    for (std::uint32_t i = 0; i < steps_.size(); ++i) {
+      const Step& s = steps_[i];
+      if (!pairs_.paired(s.first)) {
+        addUnit(s, i);
+        continue;
+      }
+      const NodeId lane0 = pairs_.lane(s.first) == 0 ? s.first : pairs_.partner(s.first);
+      auto it = unit_of_.find(lane0);
+      if (it != unit_of_.end()) {
+        position_[it->second] = i;
+        unit_of_[s.first] = it->second;
+        continue;
+      }
+      addUnit(Step{lane0, kNoPair, pairs_.partner(lane0), s.chunk}, i);
+    }
+  }
+  void addUnit(const Step& s, std::uint32_t position) {
+    const std::uint32_t u = static_cast<std::uint32_t>(units_.size());
+    units_.push_back(s);
+    position_.push_back(position);
+    for (NodeId node : {s.first, s.second, s.lane1})
+      if (node != kNoPair) unit_of_[node] = u;
+  }
+
+  static constexpr int kPatientAttempts = 32;
+
+  const Graph& g_;
+  const std::vector<Step>& steps_;
+  LanePairs& pairs_;
+  int attempts_ = 0;
+  std::vector<Step> units_;
+  std::vector<std::uint32_t> position_;
+  std::unordered_map<NodeId, std::uint32_t> unit_of_;
+};
+
+}  // namespace
+
+void LanePairs::pair(NodeId lane0, NodeId lane1, bool swapped) {
+  partner_[lane0] = lane1;
+  partner_[lane1] = lane0;
+  lane_[lane0] = 0;
+  lane_[lane1] = 1;
+  swapped_[lane0] = 0;
+  swapped_[lane1] = swapped ? 1 : 0;
+  ++count_;
+}
+
+void LanePairs::dissolve(NodeId n) {
+  const NodeId other = partner_[n];
+  if (other == kNoPair) return;
+  partner_[n] = partner_[other] = kNoPair;
+  swapped_[n] = swapped_[other] = 0;
+  --count_;
+}
+
+LanePairs chooseLanePairs(const Graph& graph, const FunctionDefinition& function,
+                          const std::vector<std::uint32_t>& part_of) {
+  return Chooser(graph, part_of).run(function);
+}
+
+std::vector<Step> orderWithPairs(const Graph& graph, const std::vector<Step>& steps, LanePairs& pairs) {
+  PairOrder order(graph, steps, pairs);
+  std::vector<Step> out;
+  while (!order.attempt(&out)) {
+  }
+  return out;
+}
+
+}  // namespace robodiff::codegen::detail

@@ -1,0 +1,62 @@
+// Lane pairs: two isomorphic operations of single-knot code computed together, in the
+// two lanes of one 128-bit vector (a 2-wide SLP vectorisation of the straight-line code).
+// A robot's symmetric limbs run the same algorithm on different data: the left leg's
+// recursion and the right leg's pair operation by operation. Why and what it bought:
+// docs/code-generation.md ("Lane pairs").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "robodiff/codegen/function_definition.hpp"
+#include "robodiff/symbolic/graph.hpp"
+
+namespace robodiff::codegen::detail {
+
+inline constexpr std::uint32_t kNoPair = 0xFFFFFFFFu;
+
+class LanePairs {
+ public:
+  explicit LanePairs(std::size_t nodes) : partner_(nodes, kNoPair), lane_(nodes, 0), swapped_(nodes, 0) {}
+
+  bool paired(symbolic::NodeId n) const { return partner_[n] != kNoPair; }
+  symbolic::NodeId partner(symbolic::NodeId n) const { return partner_[n]; }
+  int lane(symbolic::NodeId n) const { return lane_[n]; }
+  // The lane-1 node of a pair of a commutative operation reads its operands swapped.
+  bool swapped(symbolic::NodeId n) const { return swapped_[n] != 0; }
+  std::size_t count() const { return count_; }
+
+  void pair(symbolic::NodeId lane0, symbolic::NodeId lane1, bool swapped);
+  void dissolve(symbolic::NodeId n);
+
+ private:
+  std::vector<symbolic::NodeId> partner_;
+  std::vector<std::uint8_t> lane_, swapped_;
+  std::size_t count_ = 0;
+};
+
+// The pairs worth computing together in `function`'s single-knot code. part_of[n] is
+// the part (translation unit) computing node n, or kNoPair where n is not one of its
+// operations; both nodes of a pair are in one part. Seeds are pairs of output values
+// whose expressions match to some depth; a pair's operands are paired in turn while
+// they match. Groups of pairs that would cost more lane shuffles than they save
+// operations are dropped.
+LanePairs chooseLanePairs(const symbolic::Graph& graph, const FunctionDefinition& function,
+                          const std::vector<std::uint32_t>& part_of);
+
+// One step of a schedule: a node computed; a sin/cos pair (first the sin, second the
+// cos); or a lane pair (first lane 0, lane1 lane 1).
+struct Step {
+  symbolic::NodeId first = 0;
+  symbolic::NodeId second = kNoPair;
+  symbolic::NodeId lane1 = kNoPair;
+  std::uint32_t chunk = 0;
+};
+
+// The steps of one part (in an order where each node follows its operands) reordered
+// so that each pair is one step after both members' operands, staying close to the
+// given order. Pairs that cannot be ordered (a member depends on the other, or two
+// pairs on each other crosswise) are dissolved.
+std::vector<Step> orderWithPairs(const symbolic::Graph& graph, const std::vector<Step>& steps, LanePairs& pairs);
+
+}  // namespace robodiff::codegen::detail

@@ -1,0 +1,146 @@
+// Lane pairs (core/codegen/src/lane_pairs.hpp): isomorphic operations of single-knot code
+// computed two at a time in one 128-bit vector. Two "limbs" run the same recursion on
+// their own inputs, as a robot's legs do; the generated code pairs them, computes what
+// the graph computes, in one part or split over several (values crossing parts through
+// the work buffer), and a compiler without vector types compiles the same source
+// without pairs. One limb alone gets no pairs.
+#include <gtest/gtest.h>
+
+#include "codegen_fixtures.hpp"
+#include "robodiff/codegen/c_emitter.hpp"
+#include "robodiff/codegen/compiler.hpp"
+#include "robodiff/codegen/loaded_library.hpp"
+#include "support/temp_dir.hpp"
+
+namespace robodiff::codegen {
+namespace {
+
+using namespace testing;
+using robodiff::testing::TempDir;
+
+constexpr std::uint32_t kLimbLinks = 12;
+
+// One limb: a recursion over its links, each reading the previous link's two values and
+// two inputs, as a forward kinematics pass does: c' = c x_i - s y_i, s' = s x_i + c y_i,
+// e = e + c' / (1 + s' s').
+std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input) {
+  NodeId c = g.input(first_input), s = g.input(first_input + 1), e = g.constant(0.5);
+  std::vector<NodeId> out;
+  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
+    const NodeId x = g.input(first_input + 2 + 2 * i), y = g.input(first_input + 3 + 2 * i);
+    const NodeId c2 = g.binary(Op::Sub, g.binary(Op::Mul, c, x), g.binary(Op::Mul, s, y));
+    const NodeId s2 = g.binary(Op::Add, g.binary(Op::Mul, s, x), g.binary(Op::Mul, c, y));
+    e = g.binary(Op::Add, e, g.binary(Op::Div, c2, g.binary(Op::Add, g.one(), g.binary(Op::Mul, s2, s2))));
+    c = c2;
+    s = s2;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Two limbs, their values interleaved in one column: [e_0 left, e_0 right, e_1 left, ...].
+FunctionDefinition twoLimbsFunction(Graph& g) {
+  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
+  const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
+  std::vector<NodeId> values;
+  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
+    values.push_back(left[i]);
+    values.push_back(right[i]);
+  }
+  return FunctionDefinition{"limbs", {{"x", 2 * inputs}}, {OutputBlock::dense("e", 2 * kLimbLinks, 1, values)}};
+}
+
+struct PairedBuild {
+  GeneratedLibrary generated;
+  LoadedLibrary library;
+};
+
+PairedBuild buildLimbs(const Graph& g, const FunctionDefinition& f, const TempDir& dir, const std::string& name,
+            const CodegenOptions& codegen, const std::string& compiler = "") {
+  CompilerOptions options;
+  options.compiler = compiler;
+  options.native = compiler.empty();
+  GeneratedLibrary generated = generateLibrary(g, {f}, codegen);
+  LoadedLibrary library = LoadedLibrary::open(compileLibrary(generated, dir / (name + ".so"), options).library);
+  return {std::move(generated), std::move(library)};
+}
+
+std::string sourcesOf(const GeneratedLibrary& lib) {
+  std::string text;
+  for (const SourceFile& s : lib.sources) text += s.text;
+  return text;
+}
+
+// Every output within 1e-13 (relative) of the graph's own evaluation, on a few inputs.
+void expectTheGraphsValues(const Graph& g, const FunctionDefinition& f, const LoadedLibrary& library) {
+  const CompiledFunction& fn = library.function(f.name);
+  std::vector<double> work(fn.workSize() + 1);
+  for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+    const auto in = randomInputs(f, 1, seed);
+    const auto expected = reference(g, f, in, 0);
+    auto out = outputBuffers(f, 1);
+    fn.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
+    for (std::size_t i = 0; i < expected[0].size(); ++i)
+      EXPECT_TRUE(closeRelative(out[0][i], expected[0][i], 1e-13)) << seed << " " << i << ": " << out[0][i] << " vs "
+                                                                    << expected[0][i];
+  }
+}
+
+TEST(LanePairs, TwoLimbsArePairedAndComputeWhatTheGraphComputes) {
+  Graph g;
+  const FunctionDefinition f = twoLimbsFunction(g);
+  TempDir dir;
+  const PairedBuild paired = buildLimbs(g, f, dir, "paired", {});
+  const GeneratedFunctionInfo& info = paired.generated.functions.at(0);
+  std::cout << info.lane_pairs << " pairs in " << info.operations << " operations\n";
+  // Every operation of the two limbs has its twin: all of them in pairs.
+  EXPECT_EQ(2 * info.lane_pairs, info.operations);
+  EXPECT_NE(sourcesOf(paired.generated).find("rd_pair p"), std::string::npos);
+  expectTheGraphsValues(g, f, paired.library);
+
+  CodegenOptions off;
+  off.lane_pairs = false;
+  const PairedBuild plain = buildLimbs(g, f, dir, "plain", off);
+  EXPECT_EQ(plain.generated.functions.at(0).lane_pairs, 0u);
+  EXPECT_EQ(plain.generated.functions.at(0).operations, info.operations);
+  EXPECT_EQ(sourcesOf(plain.generated).find("rd_pair p"), std::string::npos);
+  expectTheGraphsValues(g, f, plain.library);
+}
+
+TEST(LanePairs, SplitIntoPartsPairsStayWithinAPartAndValuesCrossThroughTheWorkBuffer) {
+  Graph g;
+  const FunctionDefinition f = twoLimbsFunction(g);
+  CodegenOptions split;
+  split.split_threshold = 30;
+  TempDir dir;
+  const PairedBuild built = buildLimbs(g, f, dir, "split", split);
+  const GeneratedFunctionInfo& info = built.generated.functions.at(0);
+  EXPECT_GE(info.parts, 4u);
+  EXPECT_GT(info.transfer_slots, 0u);
+  EXPECT_GT(2 * info.lane_pairs, info.operations / 2);
+  // A lane of a pair handed to a later part.
+  EXPECT_NE(sourcesOf(built.generated).find("] = p"), std::string::npos);
+  expectTheGraphsValues(g, f, built.library);
+}
+
+TEST(LanePairs, ACompilerWithoutVectorTypesCompilesTheSameSourceWithoutPairs) {
+  if (!haveProgram("tcc")) GTEST_SKIP() << "tcc is not installed";
+  Graph g;
+  const FunctionDefinition f = twoLimbsFunction(g);
+  TempDir dir;
+  const PairedBuild built = buildLimbs(g, f, dir, "tcc", {}, "tcc");
+  EXPECT_GT(built.generated.functions.at(0).lane_pairs, 0u);
+  expectTheGraphsValues(g, f, built.library);
+}
+
+TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {
+  Graph g;
+  const std::vector<NodeId> values = limbValues(g, 0);
+  const FunctionDefinition f{"limb", {{"x", 2 + 2 * kLimbLinks}}, {OutputBlock::dense("e", kLimbLinks, 1, values)}};
+  const GeneratedLibrary lib = generateLibrary(g, {f});
+  EXPECT_EQ(lib.functions.at(0).lane_pairs, 0u);
+  EXPECT_EQ(sourcesOf(lib).find("rd_pair p"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace robodiff::codegen
