@@ -19,8 +19,10 @@ using symbolic::Op;
 // operations matching).
 constexpr int kSeedDepth = 4;
 constexpr double kSeedScore = 3.0;
-// Depth of the match that chooses between a commutative pair's two operand orders.
+// Depth of the match that chooses between a commutative pair's two operand orders, and
+// that ranks a pair's readers; the score two readers need.
 constexpr int kOrderDepth = 3;
+constexpr double kUpScore = 2.0;
 // Rows of one column further apart than this are not tried as seeds.
 constexpr std::size_t kSeedWindow = 64;
 // A group of pairs is kept when it saves this many instructions more than its lane
@@ -31,9 +33,11 @@ bool isVectorOp(Op op) { return op == Op::Add || op == Op::Sub || op == Op::Mul 
 
 class Chooser {
  public:
-  Chooser(const Graph& g, const std::vector<std::uint32_t>& part_of) : g_(g), part_of_(part_of), pairs_(g.size()) {}
+  Chooser(const Graph& g, const std::vector<std::uint32_t>& part_of, bool same_depth)
+      : g_(g), part_of_(part_of), same_depth_(same_depth), pairs_(g.size()) {}
 
   LanePairs run(const FunctionDefinition& f) {
+    collectReaders();
     seed(f);
     prune();
     return std::move(pairs_);
@@ -42,8 +46,12 @@ class Chooser {
  private:
   Ref arg(NodeId n, int k) const { return resolve(g_, g_.node(n).args[k]); }
   bool isFree(NodeId n) const { return part_of_[n] != kNoPair && isVectorOp(g_.node(n).op) && !pairs_.paired(n); }
+  // With same_depth_, two operations at the same depth only: neither can read the
+  // other, and no two such pairs can read each other crosswise (every read goes to a
+  // smaller depth), so every pair can be ordered.
   bool matchable(NodeId a, NodeId b) const {
-    return a != b && isFree(a) && isFree(b) && g_.node(a).op == g_.node(b).op && part_of_[a] == part_of_[b];
+    return a != b && isFree(a) && isFree(b) && g_.node(a).op == g_.node(b).op && part_of_[a] == part_of_[b] &&
+           (!same_depth_ || depth_[a] == depth_[b]);
   }
 
   // How far the expressions of two operands match: constants pair as a constant
@@ -75,8 +83,15 @@ class Chooser {
     return true;
   }
 
-  // Pairs a and b, then their operands while they match (depth first).
+  // Pairs a and b, then their operands while they match (depth first), then the
+  // readers of every new pair while they match.
   void build(NodeId a, NodeId b) {
+    const std::size_t first_new = made_.size();
+    buildDown(a, b);
+    for (std::size_t i = first_new; i < made_.size(); ++i) buildUp(made_[i].first, made_[i].second);
+  }
+
+  void buildDown(NodeId a, NodeId b) {
     std::vector<std::pair<NodeId, NodeId>> stack{{a, b}};
     while (!stack.empty()) {
       const auto [x, y] = stack.back();
@@ -88,9 +103,47 @@ class Chooser {
       const bool crossed =
           crossed_ok && (!straight_ok || crossedScore(x, y, kOrderDepth) > straightScore(x, y, kOrderDepth));
       pairs_.pair(x, y, crossed);
+      made_.push_back({x, y});
       for (int k = 1; k >= 0; --k) {
         const Ref u = arg(x, k), v = arg(y, crossed ? 1 - k : k);
         if (!u.is_constant && !v.is_constant) stack.push_back({u.base, v.base});
+      }
+    }
+  }
+
+  // A reader of x and a reader of y that match: paired, and grown down from there (the
+  // output seeds reach what the outputs read; this reaches what the pairs feed, such as
+  // one limb's recursion and its twin's below a sum over the limbs).
+  void buildUp(NodeId x, NodeId y) {
+    for (NodeId u : readers_[x]) {
+      if (!isFree(u)) continue;
+      NodeId best = kNoPair;
+      double best_score = 0.0;
+      for (NodeId v : readers_[y]) {
+        if (!matchable(u, v)) continue;
+        const double s = score(u, v, kOrderDepth);
+        if (s >= kUpScore && s > best_score) {
+          best_score = s;
+          best = v;
+        }
+      }
+      if (best != kNoPair) buildDown(u, best);
+    }
+  }
+
+  // Who reads each operation, as the lowering reads it; each operation's depth (the
+  // longest chain of operations from the inputs to it, the graph being in topological
+  // order).
+  void collectReaders() {
+    readers_.assign(g_.size(), {});
+    depth_.assign(g_.size(), 0);
+    for (NodeId id = 0; id < g_.size(); ++id) {
+      if (part_of_[id] == kNoPair) continue;
+      for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
+        const Ref r = arg(id, k);
+        if (r.is_constant || part_of_[r.base] == kNoPair) continue;
+        readers_[r.base].push_back(id);
+        depth_[id] = std::max(depth_[id], depth_[r.base] + 1);
       }
     }
   }
@@ -171,7 +224,11 @@ class Chooser {
 
   const Graph& g_;
   const std::vector<std::uint32_t>& part_of_;
+  const bool same_depth_;
   LanePairs pairs_;
+  std::vector<std::vector<NodeId>> readers_;
+  std::vector<std::uint32_t> depth_;
+  std::vector<std::pair<NodeId, NodeId>> made_;  // pairs in the order they were made
 };
 
 // One attempt at ordering a part's steps with each pair as one unit; returns false
@@ -256,7 +313,7 @@ class PairOrder {
       if (node != kNoPair) unit_of_[node] = u;
   }
 
-  static constexpr int kPatientAttempts = 32;
+  static constexpr int kPatientAttempts = 64;
 
   const Graph& g_;
   const std::vector<Step>& steps_;
@@ -288,8 +345,8 @@ void LanePairs::dissolve(NodeId n) {
 }
 
 LanePairs chooseLanePairs(const Graph& graph, const FunctionDefinition& function,
-                          const std::vector<std::uint32_t>& part_of) {
-  return Chooser(graph, part_of).run(function);
+                          const std::vector<std::uint32_t>& part_of, bool same_depth) {
+  return Chooser(graph, part_of, same_depth).run(function);
 }
 
 std::vector<Step> orderWithPairs(const Graph& graph, const std::vector<Step>& steps, LanePairs& pairs) {

@@ -40,9 +40,10 @@ class LanePairs {
 // operations; both nodes of a pair are in one part. Seeds are pairs of output values
 // whose expressions match to some depth; a pair's operands are paired in turn while
 // they match. Groups of pairs that would cost more lane shuffles than they save
-// operations are dropped.
+// operations are dropped. With same_depth, only operations at the same depth (longest
+// chain of operations from the inputs) pair: fewer pairs, but every one can be ordered.
 LanePairs chooseLanePairs(const symbolic::Graph& graph, const FunctionDefinition& function,
-                          const std::vector<std::uint32_t>& part_of);
+                          const std::vector<std::uint32_t>& part_of, bool same_depth);
 
 // One step of a schedule: a node computed; a sin/cos pair (first the sin, second the
 // cos); or a lane pair (first lane 0, lane1 lane 1).
@@ -56,7 +57,8 @@ struct Step {
 // The steps of one part (in an order where each node follows its operands) reordered
 // so that each pair is one step after both members' operands, staying close to the
 // given order. Pairs that cannot be ordered (a member depends on the other, or two
-// pairs on each other crosswise) are dissolved.
+// pairs on each other crosswise) are dissolved: one at a time, then, after 64 tries,
+// every pair still waiting at once.
 std::vector<Step> orderWithPairs(const symbolic::Graph& graph, const std::vector<Step>& steps, LanePairs& pairs);
 
 }  // namespace robodiff::codegen::detail

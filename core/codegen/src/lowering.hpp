@@ -94,8 +94,8 @@ enum class LanePairMode : std::uint8_t { Off, Order, Emit };
 // large Jacobians, where they were not measured).
 inline constexpr std::uint32_t kLanePairsBelow = kOutputOrderFrom;
 // Lane pairs are kept where they compute at least this share of the operations. Measured
-// (docs/code-generation.md): the value functions of symmetric robots with 49-80% in pairs
-// ran 1.1-2x faster; Jacobians and steps with 14-24% ran up to 1.15x slower.
+// (docs/code-generation.md): the value functions of symmetric robots with 41-85% in pairs
+// ran 1.06-2x faster; with 14-24% in pairs, up to 1.15x slower.
 inline constexpr double kLanePairCoverage = 0.3;
 
 struct LoweringOptions {

@@ -62,20 +62,22 @@ bool hasOutput(const FunctionSpec& spec, OutputKind kind) {
   return std::any_of(spec.outputs.begin(), spec.outputs.end(), [&](const OutputSpec& o) { return o.kind == kind; });
 }
 
+// Whether every output is a value (no Jacobian, gradient, Hessian or product).
+bool valuesOnly(const FunctionSpec& spec) {
+  if (spec.user)
+    return std::all_of(spec.user->outputs.begin(), spec.user->outputs.end(),
+                       [](const UserOutput& o) { return o.kind == UserOutputKind::Value; });
+  return !hasOutput(spec, OutputKind::Jacobian) && !hasOutput(spec, OutputKind::Hessian);
+}
+
 // ABA's value where no Jacobian comes with it, in a model function or in a user function
 // with value outputs only (with derivatives, `aba` takes its value from their sweep).
 bool abaValueOnly(const FunctionSpec& spec) {
-  if (spec.user)
-    return detail::callsPrimitive(*spec.user, "aba") &&
-           std::all_of(spec.user->outputs.begin(), spec.user->outputs.end(),
-                       [](const UserOutput& o) { return o.kind == UserOutputKind::Value; });
-  return spec.function == ModelFunction::Aba && !hasOutput(spec, OutputKind::Jacobian) &&
-         !hasOutput(spec, OutputKind::Hessian);
+  if (spec.user) return detail::callsPrimitive(*spec.user, "aba") && valuesOnly(spec);
+  return spec.function == ModelFunction::Aba && valuesOnly(spec);
 }
 
-}  // namespace
-
-BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+BuiltFunction buildEitherWay(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
   FunctionBuilderOptions one = options;
   if (one.rnea_jacobian == RneaJacobianMethod::Cheaper) one.rnea_jacobian = RneaJacobianMethod::Differentiate;
   if (one.aba_value == AbaValueMethod::Cheaper) one.aba_value = AbaValueMethod::Articulated;
@@ -92,6 +94,16 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
     return cheaperOf(model, spec, analytic, differentiated, kAnalyticRneaOperationsRatio);
   }
   return detail::buildModelFunction(model, spec, one);
+}
+
+}  // namespace
+
+BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
+  BuiltFunction built = buildEitherWay(model, spec, options);
+  // Lane pairs for value functions only: with derivative outputs they were measured
+  // slower (Solo-12 RNEA + J 3.36 -> 4.33 us, Talos 6.6 -> 7.4; docs/code-generation.md).
+  built.definition.lane_pairs = valuesOnly(spec);
+  return built;
 }
 
 }  // namespace robodiff

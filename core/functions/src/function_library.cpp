@@ -125,6 +125,7 @@ std::string describeFunction(const Model& model, const FunctionSpec& spec, const
     json& b = d["build"];
     b["operations"] = generated->info.operations;
     b["parts"] = generated->info.parts;
+    b["lane_pairs"] = generated->info.lane_pairs;
     b["emit_seconds"] = generated->emit_seconds;
     b["compile_seconds"] = generated->compile.seconds;
     b["compiler"] = generated->compile.compiler;

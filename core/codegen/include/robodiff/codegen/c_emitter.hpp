@@ -3,9 +3,11 @@
 //
 // The code is straight-line C99 (plus GNU vector extensions for the batched entry
 // point, compiled only by compilers that have them; others get a plain loop):
-// plain scalar locals (`double t4 = t1 * t2;`) reused by liveness, sin/cos of one
-// argument from one sincos() call, negations folded into their consumers, constants
-// printed exactly (shortest round-trip form), no fast-math assumptions.
+// plain scalar locals (`double t4 = t1 * t2;`) reused by liveness, isomorphic
+// operations two at a time in one 128-bit vector where that pays (lane pairs, GNU
+// vector types), sin/cos of one argument from one inline kernel, negations folded into
+// their consumers, constants printed exactly (shortest round-trip form), no fast-math
+// assumptions.
 #pragma once
 
 #include <cstdint>

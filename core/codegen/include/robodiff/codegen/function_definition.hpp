@@ -44,6 +44,10 @@ struct FunctionDefinition {
   std::string name;  // a C identifier: it names the function in the library
   std::vector<InputBlock> inputs;
   std::vector<OutputBlock> outputs;
+  // Single-knot code may compute isomorphic operations two at a time (lane pairs,
+  // docs/code-generation.md). The function builder turns this off for functions with
+  // derivative outputs, which ran slower with pairs.
+  bool lane_pairs = true;
 
   std::uint32_t inputCount() const;   // doubles over all input blocks
   std::uint32_t outputCount() const;  // doubles over all output blocks
