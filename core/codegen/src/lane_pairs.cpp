@@ -33,8 +33,8 @@ bool isVectorOp(Op op) { return op == Op::Add || op == Op::Sub || op == Op::Mul 
 
 class Chooser {
  public:
-  Chooser(const Graph& g, const std::vector<std::uint32_t>& part_of, bool same_depth)
-      : g_(g), part_of_(part_of), same_depth_(same_depth), pairs_(g.size()) {}
+  Chooser(const Graph& g, const std::vector<char>& pairable, bool same_depth)
+      : g_(g), pairable_(pairable), same_depth_(same_depth), pairs_(g.size()) {}
 
   LanePairs run(const FunctionDefinition& f) {
     collectReaders();
@@ -45,12 +45,12 @@ class Chooser {
 
  private:
   Ref arg(NodeId n, int k) const { return resolve(g_, g_.node(n).args[k]); }
-  bool isFree(NodeId n) const { return part_of_[n] != kNoPair && isVectorOp(g_.node(n).op) && !pairs_.paired(n); }
+  bool isFree(NodeId n) const { return pairable_[n] && isVectorOp(g_.node(n).op) && !pairs_.paired(n); }
   // With same_depth_, two operations at the same depth only: neither can read the
   // other, and no two such pairs can read each other crosswise (every read goes to a
   // smaller depth), so every pair can be ordered.
   bool matchable(NodeId a, NodeId b) const {
-    return a != b && isFree(a) && isFree(b) && g_.node(a).op == g_.node(b).op && part_of_[a] == part_of_[b] &&
+    return a != b && isFree(a) && isFree(b) && g_.node(a).op == g_.node(b).op &&
            (!same_depth_ || depth_[a] == depth_[b]);
   }
 
@@ -138,10 +138,10 @@ class Chooser {
     readers_.assign(g_.size(), {});
     depth_.assign(g_.size(), 0);
     for (NodeId id = 0; id < g_.size(); ++id) {
-      if (part_of_[id] == kNoPair) continue;
+      if (!pairable_[id]) continue;
       for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
         const Ref r = arg(id, k);
-        if (r.is_constant || part_of_[r.base] == kNoPair) continue;
+        if (r.is_constant || !pairable_[r.base]) continue;
         readers_[r.base].push_back(id);
         depth_[id] = std::max(depth_[id], depth_[r.base] + 1);
       }
@@ -191,7 +191,7 @@ class Chooser {
     const NodeId n = static_cast<NodeId>(g_.size());
     std::vector<char> scalar_reader(n, 0);
     for (NodeId id = 0; id < n; ++id) {
-      if (part_of_[id] == kNoPair || pairs_.paired(id)) continue;
+      if (!pairable_[id] || pairs_.paired(id)) continue;
       for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
         const Ref r = arg(id, k);
         if (!r.is_constant) scalar_reader[r.base] = 1;
@@ -223,7 +223,7 @@ class Chooser {
   }
 
   const Graph& g_;
-  const std::vector<std::uint32_t>& part_of_;
+  const std::vector<char>& pairable_;
   const bool same_depth_;
   LanePairs pairs_;
   std::vector<std::vector<NodeId>> readers_;
@@ -345,8 +345,8 @@ void LanePairs::dissolve(NodeId n) {
 }
 
 LanePairs chooseLanePairs(const Graph& graph, const FunctionDefinition& function,
-                          const std::vector<std::uint32_t>& part_of, bool same_depth) {
-  return Chooser(graph, part_of, same_depth).run(function);
+                          const std::vector<char>& pairable, bool same_depth) {
+  return Chooser(graph, pairable, same_depth).run(function);
 }
 
 std::vector<Step> orderWithPairs(const Graph& graph, const std::vector<Step>& steps, LanePairs& pairs) {

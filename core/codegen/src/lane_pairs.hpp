@@ -35,15 +35,15 @@ class LanePairs {
   std::size_t count_ = 0;
 };
 
-// The pairs worth computing together in `function`'s single-knot code. part_of[n] is
-// the part (translation unit) computing node n, or kNoPair where n is not one of its
-// operations; both nodes of a pair are in one part. Seeds are pairs of output values
-// whose expressions match to some depth; a pair's operands are paired in turn while
-// they match. Groups of pairs that would cost more lane shuffles than they save
-// operations are dropped. With same_depth, only operations at the same depth (longest
-// chain of operations from the inputs) pair: fewer pairs, but every one can be ordered.
+// The pairs worth computing together in `function`'s single-knot code, among the
+// operations n with pairable[n] (the function's operations but sin and cos). Seeds are
+// pairs of output values whose expressions match to some depth; a pair's operands, and
+// the readers of its members, are paired in turn while they match. Groups of pairs that
+// would cost more lane shuffles than they save operations are dropped. With same_depth,
+// only operations at the same depth (longest chain of operations from the inputs) pair:
+// fewer pairs, but every one can be ordered.
 LanePairs chooseLanePairs(const symbolic::Graph& graph, const FunctionDefinition& function,
-                          const std::vector<std::uint32_t>& part_of, bool same_depth);
+                          const std::vector<char>& pairable, bool same_depth);
 
 // One step of a schedule: a node computed; a sin/cos pair (first the sin, second the
 // cos); or a lane pair (first lane 0, lane1 lane 1).

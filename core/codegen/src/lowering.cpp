@@ -172,10 +172,10 @@ class Lowerer {
   // that the code without pairs has the same parts and work buffer as the code with them.
   void pairSteps() {
     std::uint32_t operations = 0;
-    std::vector<std::uint32_t> pairable(n_, kNoPair);
+    std::vector<char> pairable(n_, 0);
     for (const Step& s : steps_) {
       operations += s.second == kNone ? 1 : 2;
-      if (s.second == kNone) pairable[s.first] = 0;
+      if (s.second == kNone) pairable[s.first] = 1;
     }
     if (operations >= kLanePairsBelow || !f_.lane_pairs) return;
     // Pairs at one depth only, and pairs at any depth then ordered (some dissolved):
