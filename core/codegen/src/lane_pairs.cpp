@@ -210,8 +210,9 @@ class Chooser {
       double cost = scalar_reader[b] ? 1.0 : 0.0;
       for (int k = 0; k < 2; ++k) {
         const Ref x = arg(a, k), y = arg(b, pairs_.swapped(b) ? 1 - k : k);
-        cost += operandCost(x, y);
-        if (operandCost(x, y) == 0.0 && !x.is_constant) parent[find(x.base)] = find(a);
+        const double c = operandCost(x, y);
+        cost += c;
+        if (c == 0.0 && !x.is_constant) parent[find(x.base)] = find(a);
       }
       saving[a] = 1.0 - cost;
     }
@@ -231,7 +232,7 @@ class Chooser {
   std::vector<std::pair<NodeId, NodeId>> made_;  // pairs in the order they were made
 };
 
-// One attempt at ordering a part's steps with each pair as one unit; returns false
+// One attempt at ordering a function's steps with each pair as one unit; returns false
 // after dissolving a pair that could not be ordered.
 class PairOrder {
  public:
@@ -248,7 +249,7 @@ class PairOrder {
           const Ref r = resolve(g_, g_.node(node).args[k]);
           if (r.is_constant) continue;
           auto it = unit_of_.find(r.base);
-          if (it == unit_of_.end()) continue;  // computed in an earlier part, or an input
+          if (it == unit_of_.end()) continue;  // an input
           if (it->second == u) {  // one member reads the other
             pairs_.dissolve(units_[u].first);
             return false;

@@ -54,7 +54,7 @@ struct Step {
   std::uint32_t chunk = 0;
 };
 
-// The steps of one part (in an order where each node follows its operands) reordered
+// A function's steps (in an order where each node follows its operands) reordered
 // so that each pair is one step after both members' operands, staying close to the
 // given order. Pairs that cannot be ordered (a member depends on the other, or two
 // pairs on each other crosswise) are dissolved: one at a time, then, after 64 tries,
