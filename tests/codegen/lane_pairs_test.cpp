@@ -22,9 +22,11 @@ constexpr std::uint32_t kLimbLinks = 12;
 
 // One limb: a recursion over its links, each reading the previous link's two values and
 // two inputs, as a forward kinematics pass does: c' = c x_i - s y_i, s' = s x_i + c y_i,
-// e = e + c' / (1 + s' s').
-std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input) {
+// e = e + c' / (1 + s' s'). A `skewed` limb starts from c = c0 c0: one operation more,
+// everything after it one level deeper than in its twin.
+std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input, bool skewed = false) {
   NodeId c = g.input(first_input), s = g.input(first_input + 1), e = g.constant(0.5);
+  if (skewed) c = g.binary(Op::Mul, c, c);
   std::vector<NodeId> out;
   for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
     const NodeId x = g.input(first_input + 2 + 2 * i), y = g.input(first_input + 3 + 2 * i);
@@ -130,6 +132,30 @@ TEST(LanePairs, ACompilerWithoutVectorTypesCompilesTheSameSourceWithoutPairs) {
   TempDir dir;
   const PairedBuild built = buildLimbs(g, f, dir, "tcc", {}, "tcc");
   EXPECT_GT(built.generated.functions.at(0).lane_pairs, 0u);
+  expectTheGraphsValues(g, f, built.library);
+}
+
+// A step below the recursions, x_next = x + 0.01 e, on every output: every output then
+// matches every other to the depth the seeds look (an add of an input and a product with
+// a constant, of a sum, ...), and only how deep they match tells the twins, a left link
+// and the same right link, from two links of one limb. Both limbs' values in one block,
+// the left limb's first, so that most candidate seeds are pairs of one limb's links; the
+// right limb skewed a level deeper, so that pairs at one depth alone miss the twins.
+TEST(LanePairs, TwinsAreToldApartBelowAStepCommonToEveryOutput) {
+  Graph g;
+  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
+  std::vector<NodeId> values = limbValues(g, 0);
+  const std::vector<NodeId> right = limbValues(g, inputs, true);
+  values.insert(values.end(), right.begin(), right.end());
+  for (std::uint32_t i = 0; i < values.size(); ++i)
+    values[i] = g.binary(Op::Add, g.input(2 * inputs + i), g.binary(Op::Mul, g.constant(0.01), values[i]));
+  const FunctionDefinition f{"stepped", {{"x", 2 * inputs + 2 * kLimbLinks}},
+                             {OutputBlock::dense("x_next", 2 * kLimbLinks, 1, values)}};
+  TempDir dir;
+  const PairedBuild built = buildLimbs(g, f, dir, "stepped", {});
+  const GeneratedFunctionInfo& info = built.generated.functions.at(0);
+  std::cout << info.lane_pairs << " pairs in " << info.operations << " operations\n";
+  EXPECT_EQ(2 * info.lane_pairs, info.operations - 1);  // all but the skew
   expectTheGraphsValues(g, f, built.library);
 }
 

@@ -33,8 +33,8 @@ bool isVectorOp(Op op) { return op == Op::Add || op == Op::Sub || op == Op::Mul 
 
 class Chooser {
  public:
-  Chooser(const Graph& g, const std::vector<char>& pairable, bool same_depth)
-      : g_(g), pairable_(pairable), same_depth_(same_depth), pairs_(g.size()) {}
+  Chooser(const Graph& g, const std::vector<char>& pairable, const ShapeSignatures& shapes, bool same_depth)
+      : g_(g), pairable_(pairable), shapes_(shapes), same_depth_(same_depth), pairs_(g.size()) {}
 
   LanePairs run(const FunctionDefinition& f) {
     collectReaders();
@@ -74,6 +74,22 @@ class Chooser {
     return 1.0 + std::max(straightScore(a, b, depth - 1), crossedScore(a, b, depth - 1));
   }
 
+  // How deep the operands of a and b match, read straight or crossed.
+  int operandShapes(NodeId a, NodeId b, bool crossed) const {
+    int depth = 0;
+    for (int k = 0; k < 2; ++k) {
+      const Ref x = arg(a, k), y = arg(b, crossed ? 1 - k : k);
+      if (!x.is_constant && !y.is_constant) depth += shapes_.matchDepth(x.base, y.base);
+    }
+    return depth;
+  }
+  // A commutative pair reads its operands crossed when they match deeper that way.
+  bool crossedIsBetter(NodeId a, NodeId b) const {
+    const int straight = operandShapes(a, b, false), crossed = operandShapes(a, b, true);
+    if (straight != crossed) return crossed > straight;
+    return crossedScore(a, b, kOrderDepth) > straightScore(a, b, kOrderDepth);
+  }
+
   // Operand signs must agree lane by lane in the order the pair reads them.
   bool signsAgree(NodeId a, NodeId b, bool crossed) const {
     for (int k = 0; k < 2; ++k) {
@@ -100,8 +116,7 @@ class Chooser {
       const bool straight_ok = signsAgree(x, y, false);
       const bool crossed_ok = symbolic::isCommutative(g_.node(x).op) && signsAgree(x, y, true);
       if (!straight_ok && !crossed_ok) continue;
-      const bool crossed =
-          crossed_ok && (!straight_ok || crossedScore(x, y, kOrderDepth) > straightScore(x, y, kOrderDepth));
+      const bool crossed = crossed_ok && (!straight_ok || crossedIsBetter(x, y));
       pairs_.pair(x, y, crossed);
       made_.push_back({x, y});
       for (int k = 1; k >= 0; --k) {
@@ -118,12 +133,12 @@ class Chooser {
     for (NodeId u : readers_[x]) {
       if (!isFree(u)) continue;
       NodeId best = kNoPair;
-      double best_score = 0.0;
+      std::pair<int, double> best_rank{-1, 0.0};  // (shape depth, score)
       for (NodeId v : readers_[y]) {
         if (!matchable(u, v)) continue;
-        const double s = score(u, v, kOrderDepth);
-        if (s >= kUpScore && s > best_score) {
-          best_score = s;
+        const std::pair<int, double> rank{shapes_.matchDepth(u, v), score(u, v, kOrderDepth)};
+        if (rank.second >= kUpScore && rank > best_rank) {
+          best_rank = rank;
           best = v;
         }
       }
@@ -153,7 +168,7 @@ class Chooser {
   // each other, best matches first. Neighbouring columns of a Jacobian row share too
   // much with scalar code: pairing them made the Panda's RNEA Jacobian 1.26x slower.
   void seed(const FunctionDefinition& f) {
-    std::vector<std::tuple<double, NodeId, NodeId>> candidates;
+    std::vector<std::tuple<int, double, NodeId, NodeId>> candidates;  // (-shape depth, -score, a, b)
     for (const OutputBlock& block : f.outputs) {
       if (block.kind != OutputKind::Dense || block.cols == 0) continue;
       for (std::uint32_t c = 0; c < block.cols; ++c) {
@@ -165,13 +180,14 @@ class Chooser {
         for (std::size_t i = 0; i < values.size(); ++i)
           for (std::size_t j = i + 1; j < values.size() && j <= i + kSeedWindow; ++j) {
             const double s = score(values[i], values[j], kSeedDepth);
-            if (s >= kSeedScore) candidates.emplace_back(-s, values[i], values[j]);
+            if (s >= kSeedScore) candidates.emplace_back(-shapes_.matchDepth(values[i], values[j]), -s, values[i], values[j]);
           }
       }
     }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const auto& x, const auto& y) { return std::get<0>(x) < std::get<0>(y); });
-    for (const auto& [s, a, b] : candidates) build(a, b);
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
+      return std::tie(std::get<0>(x), std::get<1>(x)) < std::tie(std::get<0>(y), std::get<1>(y));
+    });
+    for (const auto& [depth, s, a, b] : candidates) build(a, b);
   }
 
   // Extra instructions a pair's operand costs: none for a pair computed in the same
@@ -225,6 +241,7 @@ class Chooser {
 
   const Graph& g_;
   const std::vector<char>& pairable_;
+  const ShapeSignatures& shapes_;
   const bool same_depth_;
   LanePairs pairs_;
   std::vector<std::vector<NodeId>> readers_;
@@ -346,8 +363,8 @@ void LanePairs::dissolve(NodeId n) {
 }
 
 LanePairs chooseLanePairs(const Graph& graph, const FunctionDefinition& function,
-                          const std::vector<char>& pairable, bool same_depth) {
-  return Chooser(graph, pairable, same_depth).run(function);
+                          const std::vector<char>& pairable, const ShapeSignatures& shapes, bool same_depth) {
+  return Chooser(graph, pairable, shapes, same_depth).run(function);
 }
 
 std::vector<Step> orderWithPairs(const Graph& graph, const std::vector<Step>& steps, LanePairs& pairs) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "robodiff/codegen/function_definition.hpp"
+#include "shape_signatures.hpp"
 #include "robodiff/symbolic/graph.hpp"
 
 namespace robodiff::codegen::detail {
@@ -37,13 +38,14 @@ class LanePairs {
 
 // The pairs worth computing together in `function`'s single-knot code, among the
 // operations n with pairable[n] (the function's operations but sin and cos). Seeds are
-// pairs of output values whose expressions match to some depth; a pair's operands, and
-// the readers of its members, are paired in turn while they match. Groups of pairs that
+// pairs of output values whose expressions match to some depth, those whose shapes match
+// deepest first; a pair's operands, and the readers of its members, are paired in turn
+// while they match (the reader whose shape matches deepest). Groups of pairs that
 // would cost more lane shuffles than they save operations are dropped. With same_depth,
 // only operations at the same depth (longest chain of operations from the inputs) pair:
 // fewer pairs, but every one can be ordered.
 LanePairs chooseLanePairs(const symbolic::Graph& graph, const FunctionDefinition& function,
-                          const std::vector<char>& pairable, bool same_depth);
+                          const std::vector<char>& pairable, const ShapeSignatures& shapes, bool same_depth);
 
 // One step of a schedule: a node computed; a sin/cos pair (first the sin, second the
 // cos); or a lane pair (first lane 0, lane1 lane 1).

@@ -8,6 +8,7 @@
 #include "emission_order.hpp"
 #include "lane_pairs.hpp"
 #include "operand_ref.hpp"
+#include "shape_signatures.hpp"
 #include "sum_chains.hpp"
 
 namespace robodiff::codegen::detail {
@@ -182,8 +183,9 @@ class Lowerer {
     // symmetric limbs pair better one way or the other (Solo-12's ABA 1,400 against 411,
     // Talos's 2,076 against 3,818). The way with more pairs is kept.
     std::vector<Step> ordered;
+    const ShapeSignatures shapes(g_, pairable);
     for (bool same_depth : {true, false}) {
-      LanePairs pairs = chooseLanePairs(g_, f_, pairable, same_depth);
+      LanePairs pairs = chooseLanePairs(g_, f_, pairable, shapes, same_depth);
       if (pairs.count() <= pairs_.count()) continue;
       std::vector<Step> order = orderWithPairs(g_, steps_, pairs);
       if (pairs.count() <= pairs_.count()) continue;
