@@ -2,8 +2,8 @@
 // computed two at a time in one 128-bit vector. Two "limbs" run the same recursion on
 // their own inputs, as a robot's legs do; the generated code pairs them, computes what
 // the graph computes, in one part or split over several (values crossing parts through
-// the work buffer), and a compiler without vector types compiles the same source
-// without pairs. One limb alone gets no pairs.
+// the work buffer, a pair's lanes side by side), and a compiler without vector types
+// compiles the same source without pairs. One limb alone gets no pairs.
 #include <gtest/gtest.h>
 
 #include "codegen_fixtures.hpp"
@@ -120,8 +120,9 @@ TEST(LanePairs, SplitIntoPartsPairsStayWithinAPartAndValuesCrossThroughTheWorkBu
   EXPECT_GE(info.parts, 4u);
   EXPECT_GT(info.transfer_slots, 0u);
   EXPECT_GT(2 * info.lane_pairs, info.operations / 2);
-  // A lane of a pair handed to a later part.
-  EXPECT_NE(sourcesOf(built.generated).find("] = p"), std::string::npos);
+  // A pair's lanes handed to a later part side by side, and loaded there as a pair.
+  EXPECT_NE(sourcesOf(built.generated).find("rd_store_pair(w + "), std::string::npos);
+  EXPECT_NE(sourcesOf(built.generated).find("= rd_load_pair(w + "), std::string::npos);
   expectTheGraphsValues(g, f, built.library);
 }
 
@@ -157,6 +158,32 @@ TEST(LanePairs, TwinsAreToldApartBelowAStepCommonToEveryOutput) {
   std::cout << info.lane_pairs << " pairs in " << info.operations << " operations\n";
   EXPECT_EQ(2 * info.lane_pairs, info.operations - 1);  // all but the skew
   expectTheGraphsValues(g, f, built.library);
+}
+
+// A Jacobian's twins sit in different columns: d e_left / d x_left and d e_right /
+// d x_right. Here the limbs' values are the two columns of one block; seeded at twins only
+// (as derivative functions are), every operation still finds its twin.
+TEST(LanePairs, TwinsInDifferentColumnsArePairedWhenSeededAtTwinsOnly) {
+  Graph g;
+  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
+  const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
+  std::vector<NodeId> values;
+  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
+    values.push_back(left[i]);
+    values.push_back(right[i]);
+  }
+  FunctionDefinition f{"columns", {{"x", 2 * inputs}}, {OutputBlock::dense("e", kLimbLinks, 2, values)}};
+  f.lane_pairs = LanePairSeeds::Twins;
+  TempDir dir;
+  const PairedBuild built = buildLimbs(g, f, dir, "columns", {});
+  const GeneratedFunctionInfo& info = built.generated.functions.at(0);
+  std::cout << info.lane_pairs << " pairs in " << info.operations << " operations\n";
+  // All but a few next to the inputs, which would cost more insertions than they save.
+  EXPECT_GE(2 * info.lane_pairs, info.operations * 9 / 10);
+  expectTheGraphsValues(g, f, built.library);
+
+  f.lane_pairs = LanePairSeeds::None;
+  EXPECT_EQ(generateLibrary(g, {f}).functions.at(0).lane_pairs, 0u);
 }
 
 TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {

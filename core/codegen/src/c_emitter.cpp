@@ -90,7 +90,9 @@ class ChunkPrinter {
       if (ins.kind == InstrKind::StoreOutput || ins.kind == InstrKind::ZeroOutput) out_blocks.insert(ins.block);
       if (ins.kind == InstrKind::ZeroOutput) zeroed.insert(ins.block);
       if (ins.args[0].kind == Operand::Kind::Input) in_blocks.insert(ins.args[0].block);
-      if (ins.kind == InstrKind::LoadTransfer || ins.kind == InstrKind::StoreTransfer) uses_work = true;
+      if (ins.kind == InstrKind::LoadTransfer || ins.kind == InstrKind::StoreTransfer ||
+          ins.kind == InstrKind::LoadTransferPair || ins.kind == InstrKind::StoreTransferPair)
+        uses_work = true;
     }
     if (vector() && first)
       for (std::uint32_t b = 0; b < f_.outputs.size(); ++b)
@@ -253,6 +255,12 @@ class ChunkPrinter {
         break;
       case InstrKind::ComputePair:
         out_ << "  " << assignPair(ins.dst) << expression(ins) << ";\n";
+        break;
+      case InstrKind::LoadTransferPair:
+        out_ << "  " << assignPair(ins.dst) << "rd_load_pair(w + " << ins.index << ");\n";
+        break;
+      case InstrKind::StoreTransferPair:
+        out_ << "  rd_store_pair(w + " << ins.index << ", " << operand(ins.args[0]) << ");\n";
         break;
       case InstrKind::SinCos:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {

@@ -94,6 +94,8 @@ class Assembler {
         throw std::logic_error("interpreter: a split function");
       case InstrKind::PackPair:
       case InstrKind::ComputePair:
+      case InstrKind::LoadTransferPair:
+      case InstrKind::StoreTransferPair:
         throw std::logic_error("interpreter: lane pairs");
     }
   }

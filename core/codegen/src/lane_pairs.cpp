@@ -39,6 +39,7 @@ class Chooser {
   LanePairs run(const FunctionDefinition& f) {
     collectReaders();
     seed(f);
+    pruneMarginal(f);
     prune();
     return std::move(pairs_);
   }
@@ -163,12 +164,50 @@ class Chooser {
     }
   }
 
-  // Candidate seeds: output values of one column of a dense block (a value vector's
-  // entries; a Jacobian's derivatives of different entries along one direction), near
-  // each other, best matches first. Neighbouring columns of a Jacobian row share too
-  // much with scalar code: pairing them made the Panda's RNEA Jacobian 1.26x slower.
+  // Candidate seeds, the deepest shape matches first, then the best matches to depth 4:
+  // twins, and with LanePairSeeds::TwinsAndColumns, neighbouring values of one column.
   void seed(const FunctionDefinition& f) {
-    std::vector<std::tuple<int, double, NodeId, NodeId>> candidates;  // (-shape depth, -score, a, b)
+    std::vector<Candidate> candidates;
+    twinSeeds(f, &candidates);
+    if (f.lane_pairs == LanePairSeeds::TwinsAndColumns) columnSeeds(f, &candidates);
+    std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+      return std::tie(x.depth, x.score) > std::tie(y.depth, y.score);
+    });
+    for (const Candidate& c : candidates) build(c.a, c.b);
+  }
+  struct Candidate {
+    int depth;     // how deep the shapes match
+    double score;  // the match to depth kSeedDepth
+    NodeId a, b;
+  };
+  void addCandidate(NodeId a, NodeId b, std::vector<Candidate>* candidates) const {
+    const double s = score(a, b, kSeedDepth);
+    if (s >= kSeedScore) candidates->push_back({shapes_.matchDepth(a, b), s, a, b});
+  }
+
+  // Output values anywhere in the outputs whose shapes match throughout, in output
+  // order, each with the next one of the same shape: a Jacobian's entry and its twin,
+  // the mirrored entry in the mirrored column (the only seeds a derivative function gets).
+  void twinSeeds(const FunctionDefinition& f, std::vector<Candidate>* candidates) const {
+    std::unordered_map<std::uint64_t, NodeId> waiting;  // shape -> a value still without a twin
+    std::vector<char> seen(g_.size(), 0);
+    for (const OutputBlock& block : f.outputs)
+      for (NodeId v : block.values) {
+        const Ref ref = resolve(g_, v);
+        if (ref.is_constant || !isFree(ref.base) || seen[ref.base]) continue;
+        seen[ref.base] = 1;
+        auto [it, inserted] = waiting.try_emplace(shapes_.deepest(ref.base), ref.base);
+        if (inserted) continue;
+        addCandidate(it->second, ref.base, candidates);
+        waiting.erase(it);
+      }
+  }
+
+  // Output values of one column of a dense block, near each other (a value vector's
+  // entries). Not for derivative functions: a Jacobian's column pairs derivatives of
+  // unrelated entries, which share too much with scalar code (Panda RNEA + J 1.22 ->
+  // 1.44 us with 966 such pairs).
+  void columnSeeds(const FunctionDefinition& f, std::vector<Candidate>* candidates) const {
     for (const OutputBlock& block : f.outputs) {
       if (block.kind != OutputKind::Dense || block.cols == 0) continue;
       for (std::uint32_t c = 0; c < block.cols; ++c) {
@@ -178,16 +217,10 @@ class Chooser {
           if (!ref.is_constant && isFree(ref.base)) values.push_back(ref.base);
         }
         for (std::size_t i = 0; i < values.size(); ++i)
-          for (std::size_t j = i + 1; j < values.size() && j <= i + kSeedWindow; ++j) {
-            const double s = score(values[i], values[j], kSeedDepth);
-            if (s >= kSeedScore) candidates.emplace_back(-shapes_.matchDepth(values[i], values[j]), -s, values[i], values[j]);
-          }
+          for (std::size_t j = i + 1; j < values.size() && j <= i + kSeedWindow; ++j)
+            addCandidate(values[i], values[j], candidates);
       }
     }
-    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
-      return std::tie(std::get<0>(x), std::get<1>(x)) < std::tie(std::get<0>(y), std::get<1>(y));
-    });
-    for (const auto& [depth, s, a, b] : candidates) build(a, b);
   }
 
   // Extra instructions a pair's operand costs: none for a pair computed in the same
@@ -199,6 +232,57 @@ class Chooser {
     if (pairs_.paired(x.base) && pairs_.partner(x.base) == y.base && pairs_.lane(x.base) == 0) return 0.0;
     return 1.0;
   }
+
+  // Which values scalar code reads (a member of no pair reading them).
+  std::vector<char> scalarReaders() const {
+    std::vector<char> scalar_reader(g_.size(), 0);
+    for (NodeId id = 0; id < g_.size(); ++id) {
+      if (!pairable_[id] || pairs_.paired(id)) continue;
+      for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
+        const Ref r = arg(id, k);
+        if (!r.is_constant) scalar_reader[r.base] = 1;
+      }
+    }
+    return scalar_reader;
+  }
+
+  // Dissolves the pairs that cost more than they save on their own, pass after pass
+  // until none does: a pair saves its instruction, and an insertion for each operand of
+  // a pair that reads it in the same lanes; it costs its operands' insertions and an
+  // extraction when scalar code reads lane 1 (shuffleCost each).
+  void pruneMarginal(const FunctionDefinition& f) {
+    const NodeId n = static_cast<NodeId>(g_.size());
+    for (int pass = 0; pass < kMarginalPasses; ++pass) {
+      const std::vector<char> scalar_reader = scalarReaders();
+      std::vector<double> margin(n, 0.0);
+      for (NodeId a = 0; a < n; ++a) {
+        if (!pairs_.paired(a) || pairs_.lane(a) != 0) continue;
+        const NodeId b = pairs_.partner(a);
+        const double w = shuffleCost(f);
+        margin[a] += 1.0 - (scalar_reader[b] ? w : 0.0);
+        for (int k = 0; k < 2; ++k) {
+          const Ref x = arg(a, k), y = arg(b, pairs_.swapped(b) ? 1 - k : k);
+          const double c = operandCost(x, y);
+          margin[a] -= c * w;
+          if (c == 0.0 && !x.is_constant) margin[x.base] += 1.0;  // x's pair spares this insertion
+        }
+      }
+      bool changed = false;
+      for (NodeId a = 0; a < n; ++a)
+        if (pairs_.paired(a) && pairs_.lane(a) == 0 && margin[a] < 0.0) {
+          pairs_.dissolve(a);
+          changed = true;
+        }
+      if (!changed) return;
+    }
+  }
+  static constexpr int kMarginalPasses = 32;
+  // What an insertion or an extraction costs, in instructions. A derivative function's
+  // twins sit among more scalar code (the terms a free-flyer's base and torso share
+  // with every limb): counted at 1, the free-flying Talos's RNEA + J kept 13,657 pairs
+  // with 7,232 insertions and ran 10% slower than without pairs; at 1.5, 7,374 pairs
+  // with 1,617 insertions, 12% faster (docs/code-generation.md).
+  static double shuffleCost(const FunctionDefinition& f) { return f.lane_pairs == LanePairSeeds::Twins ? 1.5 : 1.0; }
 
   // Keeps the groups of connected pairs (a pair reading another as its operand) that
   // save at least kMinimumSaving instructions: each pair saves one, each operand built

@@ -10,6 +10,7 @@
 #include "operand_ref.hpp"
 #include "shape_signatures.hpp"
 #include "sum_chains.hpp"
+#include "transfer_slots.hpp"
 
 namespace robodiff::codegen::detail {
 namespace {
@@ -178,7 +179,7 @@ class Lowerer {
       operations += s.second == kNone ? 1 : 2;
       if (s.second == kNone) pairable[s.first] = 1;
     }
-    if (operations >= kLanePairsBelow || !f_.lane_pairs) return;
+    if (operations >= kLanePairsBelow || f_.lane_pairs == LanePairSeeds::None) return;
     // Pairs at one depth only, and pairs at any depth then ordered (some dissolved):
     // symmetric limbs pair better one way or the other (Solo-12's ABA 1,400 against 411,
     // Talos's 2,076 against 3,818). The way with more pairs is kept.
@@ -192,11 +193,15 @@ class Lowerer {
       pairs_ = std::move(pairs);
       ordered = std::move(order);
     }
-    if (2.0 * static_cast<double>(pairs_.count()) < kLanePairCoverage * operations) {
+    const double coverage = f_.lane_pairs == LanePairSeeds::Twins ? kTwinPairCoverage : kLanePairCoverage;
+    if (pairs_.count() == 0 || 2.0 * static_cast<double>(pairs_.count()) < coverage * operations) {
       pairs_ = LanePairs(n_);
       return;
     }
     steps_ = std::move(ordered);
+    twin_.assign(n_, kNone);
+    for (const Step& s : steps_)
+      if (s.lane1 != kNone) twin_[s.first] = s.lane1;
   }
 
   // Each pair step as two steps, one after the other, in the pair's chunk.
@@ -211,45 +216,10 @@ class Lowerer {
     pairs_ = LanePairs(n_);
   }
 
-  // For each value needed by a later chunk than its own: a transfer slot of the work
-  // buffer, free again after the last chunk reading it.
   void assignTransfers() {
-    last_chunk_use_.assign(n_, kNone);
-    for (const Step& s : steps_) {
-      for (NodeId id : {s.first, s.lane1}) {
-        if (id == kNone) continue;
-        const Node& n = g_.node(id);
-        for (int a = 0; a < symbolic::arity(n.op); ++a) {
-          Ref r = resolve(g_, n.args[a]);
-          if (r.is_constant) continue;
-          std::uint32_t& last = last_chunk_use_[r.base];
-          if (last == kNone || s.chunk > last) last = s.chunk;
-        }
-      }
-    }
-    transfer_slot_.assign(n_, kNone);
-    if (chunk_count_ == 1) return;
-    std::vector<std::vector<std::uint32_t>> release_at(chunk_count_ + 1);
-    std::vector<std::uint32_t> free_slots;
-    std::uint32_t current = kNone;
-    for (const Step& s : steps_) {
-      if (s.chunk != current) {
-        current = s.chunk;
-        for (std::uint32_t slot : release_at[current]) free_slots.push_back(slot);
-      }
-      for (NodeId d : {s.first, s.lane1, s.second}) {
-        if (d == kNone || last_chunk_use_[d] == kNone || last_chunk_use_[d] <= s.chunk) continue;
-        std::uint32_t slot;
-        if (!free_slots.empty()) {
-          slot = free_slots.back();
-          free_slots.pop_back();
-        } else {
-          slot = transfer_slots_++;
-        }
-        transfer_slot_[d] = slot;
-        release_at[last_chunk_use_[d] + 1].push_back(slot);
-      }
-    }
+    TransferSlots slots = assignTransferSlots(g_, steps_, twin_, chunk_count_);
+    transfer_slot_ = std::move(slots.slot);
+    transfer_slots_ = slots.count;
   }
 
   // Blocks with at least this many constant-zero entries have them cleared by one
@@ -426,6 +396,7 @@ class Lowerer {
       const Ref y = resolve(g_, g_.node(b).args[swapped ? 1 - k : k]);
       Operand& o = ins.args[k];
       o.kind = Operand::Kind::Pair;
+      loadTransferredPair(x, y, chunk);
       if (inLanes(x, y)) {
         o.slot = local_slot_[x.base];
         o.negated = x.negated;
@@ -450,10 +421,39 @@ class Lowerer {
     }
     chunk.code.push_back(ins);
     chunk.operations += 2;
+    const bool together = transfer_slot_[a] != kNone && transfer_slot_[b] == transfer_slot_[a] + 1;
+    if (together) {
+      Instr st;
+      st.kind = InstrKind::StoreTransferPair;
+      st.index = transfer_slot_[a];
+      st.args[0].kind = Operand::Kind::Pair;
+      st.args[0].slot = ins.dst;
+      chunk.code.push_back(st);
+    }
     for (NodeId d : {a, b}) {
-      afterDefinition(d, chunk);
+      afterDefinition(d, chunk, !together);
       if (lastRead(d) == kNone) kill(d);
     }
+  }
+
+  // Two values handed over by earlier chunks in adjacent slots, x first: loaded at once
+  // into the lanes of one pair local.
+  void loadTransferredPair(const Ref& x, const Ref& y, Chunk& chunk) {
+    if (x.is_constant || y.is_constant || x.negated != y.negated || x.base == y.base) return;
+    if (local_chunk_[x.base] == chunk_ || local_chunk_[y.base] == chunk_) return;
+    const std::uint32_t slot = transfer_slot_[x.base];
+    if (slot == kNone || transfer_slot_[y.base] != slot + 1 || g_.node(x.base).op == Op::Input) return;
+    Instr load;
+    load.kind = InstrKind::LoadTransferPair;
+    load.index = slot;
+    load.dst = allocatePair();
+    pair_live_[load.dst] = 2;
+    for (NodeId d : {x.base, y.base}) {
+      local_chunk_[d] = chunk_;
+      local_slot_[d] = load.dst;
+      local_lane_[d] = d == x.base ? 0 : 1;
+    }
+    chunk.code.push_back(load);
   }
 
   // x in lane 0 and y in lane 1 of one pair local of this chunk, with one sign.
@@ -501,7 +501,7 @@ class Lowerer {
 
   // Outputs of a value are written, and a value read by a later chunk handed over,
   // right after it is computed.
-  void afterDefinition(NodeId d, Chunk& chunk) {
+  void afterDefinition(NodeId d, Chunk& chunk, bool hand_over = true) {
     for (std::uint32_t e = out_head_[d]; e != kNone; e = out_entries_[e].next) {
       Instr st;
       st.kind = InstrKind::StoreOutput;
@@ -511,7 +511,7 @@ class Lowerer {
       st.args[0].negated = out_entries_[e].negated;
       chunk.code.push_back(st);
     }
-    if (transfer_slot_[d] != kNone) {
+    if (hand_over && transfer_slot_[d] != kNone) {
       Instr st;
       st.kind = InstrKind::StoreTransfer;
       st.index = transfer_slot_[d];
@@ -539,7 +539,8 @@ class Lowerer {
   std::vector<Step> steps_;
   std::uint32_t chunk_count_ = 1;
   std::uint32_t sincos_pairs_ = 0;
-  std::vector<std::uint32_t> last_chunk_use_, transfer_slot_;
+  std::vector<std::uint32_t> transfer_slot_;
+  std::vector<NodeId> twin_;  // a lane pair's lane-0 node -> its lane-1 node (kNone: none)
   std::uint32_t transfer_slots_ = 0;
 
   LanePairs pairs_;

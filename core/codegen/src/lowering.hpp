@@ -54,6 +54,8 @@ enum class InstrKind : std::uint8_t {
   ZeroOutput,     // out[block] = 0 on the runs chunk.zero_runs[index] (before the block's other stores)
   PackPair,       // pair dst = {args[0], args[1]} (two scalar operands)
   ComputePair,    // pair dst = op(args), lane by lane (Pair operands)
+  LoadTransferPair,   // pair dst = {work[index], work[index + 1]}
+  StoreTransferPair,  // {work[index], work[index + 1]} = pair args[0]
 };
 
 struct Instr {
@@ -97,6 +99,9 @@ inline constexpr std::uint32_t kLanePairsBelow = kOutputOrderFrom;
 // (docs/code-generation.md): the value functions of symmetric robots with 41-85% in pairs
 // ran 1.06-2x faster; with 14-24% in pairs, up to 1.15x slower.
 inline constexpr double kLanePairCoverage = 0.3;
+// The same for a derivative function's pairs (seeded at twins only): Talos fixed ABA + J
+// and Euler step + J, 26-27% in pairs, ran 1.09-1.16x faster with them.
+inline constexpr double kTwinPairCoverage = 0.2;
 
 struct LoweringOptions {
   std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk

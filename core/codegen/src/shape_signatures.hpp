@@ -20,6 +20,9 @@ class ShapeSignatures {
   // The deepest recorded level (kLevels) at which a and b have the same shape; 0 when
   // their operations differ.
   int matchDepth(symbolic::NodeId a, symbolic::NodeId b) const;
+  // The signature at the deepest level kept: equal for two nodes whose expressions have
+  // the same shape throughout (hash collisions aside).
+  std::uint64_t deepest(symbolic::NodeId n) const { return kept_.back()[n]; }
 
  private:
   std::vector<int> levels_;                       // the levels kept, increasing

@@ -100,9 +100,10 @@ BuiltFunction buildEitherWay(const Model& model, const FunctionSpec& spec, const
 
 BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const FunctionBuilderOptions& options) {
   BuiltFunction built = buildEitherWay(model, spec, options);
-  // Lane pairs for value functions only: with derivative outputs they were measured
-  // slower (Solo-12 RNEA + J 3.36 -> 4.33 us, Talos 6.6 -> 7.4; docs/code-generation.md).
-  built.definition.lane_pairs = valuesOnly(spec);
+  // Lane pairs seeded at a Jacobian's columns made derivative functions slower (Panda
+  // RNEA + J 1.22 -> 1.44 us); at twins, faster (docs/code-generation.md).
+  built.definition.lane_pairs =
+      valuesOnly(spec) ? codegen::LanePairSeeds::TwinsAndColumns : codegen::LanePairSeeds::Twins;
   return built;
 }
 

@@ -40,14 +40,20 @@ struct OutputBlock {
   std::uint32_t size() const { return static_cast<std::uint32_t>(values.size()); }
 };
 
+// Where single-knot code seeds its lane pairs (isomorphic operations computed two at a
+// time, docs/code-generation.md): nowhere; at twins only (two output values whose
+// expressions have the same shape throughout, anywhere in the outputs: a left leg's entry
+// and the right leg's); or also at neighbouring values of one output column that match
+// at the top (a value vector's entries).
+enum class LanePairSeeds : std::uint8_t { None, Twins, TwinsAndColumns };
+
 struct FunctionDefinition {
   std::string name;  // a C identifier: it names the function in the library
   std::vector<InputBlock> inputs;
   std::vector<OutputBlock> outputs;
-  // Single-knot code may compute isomorphic operations two at a time (lane pairs,
-  // docs/code-generation.md). The function builder turns this off for functions with
-  // derivative outputs, which ran slower with pairs.
-  bool lane_pairs = true;
+  // The function builder seeds functions with derivative outputs at twins only: seeds
+  // from a Jacobian's columns paired unrelated entries and made the code slower.
+  LanePairSeeds lane_pairs = LanePairSeeds::TwinsAndColumns;
 
   std::uint32_t inputCount() const;   // doubles over all input blocks
   std::uint32_t outputCount() const;  // doubles over all output blocks
