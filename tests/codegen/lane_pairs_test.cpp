@@ -40,8 +40,9 @@ std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input, bool skewed 
   return out;
 }
 
-// Two limbs, their values interleaved in one column: [e_0 left, e_0 right, e_1 left, ...].
-FunctionDefinition twoLimbsFunction(Graph& g) {
+// Two limbs, their values interleaved in one block: [e_0 left, e_0 right, e_1 left, ...],
+// in one column, or (cols 2) the left limb's in column 0 and the right limb's in column 1.
+FunctionDefinition twoLimbsFunction(Graph& g, std::uint32_t cols = 1) {
   constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
   const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
   std::vector<NodeId> values;
@@ -49,7 +50,8 @@ FunctionDefinition twoLimbsFunction(Graph& g) {
     values.push_back(left[i]);
     values.push_back(right[i]);
   }
-  return FunctionDefinition{"limbs", {{"x", 2 * inputs}}, {OutputBlock::dense("e", 2 * kLimbLinks, 1, values)}};
+  return FunctionDefinition{"limbs", {{"x", 2 * inputs}},
+                            {OutputBlock::dense("e", 2 * kLimbLinks / cols, cols, values)}};
 }
 
 struct PairedBuild {
@@ -165,14 +167,7 @@ TEST(LanePairs, TwinsAreToldApartBelowAStepCommonToEveryOutput) {
 // (as derivative functions are), every operation still finds its twin.
 TEST(LanePairs, TwinsInDifferentColumnsArePairedWhenSeededAtTwinsOnly) {
   Graph g;
-  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
-  const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
-  std::vector<NodeId> values;
-  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
-    values.push_back(left[i]);
-    values.push_back(right[i]);
-  }
-  FunctionDefinition f{"columns", {{"x", 2 * inputs}}, {OutputBlock::dense("e", kLimbLinks, 2, values)}};
+  FunctionDefinition f = twoLimbsFunction(g, 2);
   f.lane_pairs = LanePairSeeds::Twins;
   TempDir dir;
   const PairedBuild built = buildLimbs(g, f, dir, "columns", {});

@@ -34,31 +34,28 @@ TEST_P(PairedGolden, PairedJacobiansMatchPinocchio) {
   const testing::GoldenRobot golden = testing::loadGolden(shared, GetParam().robot);
   const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
   const int n = model.nv;
-  {
-    const std::string x = fn == "rnea" ? "a" : "tau";
-    FunctionSpec spec = parseFunctionSpec(R"({"function": ")" + fn +
-                                          R"(", "outputs": [{"kind": "value"}, {"kind": "jacobian", "wrt": ["q", "v", ")" +
-                                          x + R"("]}]})");
-    spec.build.optimization = "O1";
-    testing::TempDir dir;
-    const GeneratedFunctionLibrary generated = generateFunctionLibrary(model, spec, dir.path() / "out");
-    const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(generated.library);
-    const codegen::CompiledFunction f = library.function(generated.built.definition.name);
-    std::cout << GetParam().robot << " " << fn << " value + Jacobian: " << generated.info.lane_pairs << " pairs in "
-              << generated.info.operations << " operations\n";
-    EXPECT_EQ(generated.built.definition.lane_pairs, codegen::LanePairSeeds::Twins);
-    EXPECT_GT(generated.info.lane_pairs, 0u) << "Talos's legs and arms are twins";
-    for (std::size_t s = 0; s < golden.samples.size(); s += 4) {
-      const auto& g = golden.samples[s];
-      const bool rnea = fn == "rnea";
-      const std::vector<Eigen::VectorXd> out =
-          evaluateBlocks(f, generated.built.definition, {g.q, g.v, rnea ? g.a : g.tau});
-      const Eigen::MatrixXd J = Eigen::Map<const Eigen::MatrixXd>(out[1].data(), 3 * n, n).transpose();
-      EXPECT_TRUE(matricesAgree(out[0], rnea ? g.tau : g.ddq, 1e-9));
-      EXPECT_TRUE(matricesAgree(J.leftCols(n), rnea ? g.dtau_dq : g.dddq_dq, 1e-9));
-      EXPECT_TRUE(matricesAgree(J.middleCols(n, n), rnea ? g.dtau_dv : g.dddq_dv, 1e-9));
-      EXPECT_TRUE(matricesAgree(J.rightCols(n), rnea ? g.M : Eigen::MatrixXd(g.M.inverse()), 1e-9));
-    }
+  const bool rnea = fn == "rnea";
+  const std::string x = rnea ? "a" : "tau";
+  FunctionSpec spec = parseFunctionSpec(R"({"function": ")" + fn + R"(", "outputs": [{"kind": "value"}, )" +
+                                        R"({"kind": "jacobian", "wrt": ["q", "v", ")" + x + R"("]}]})");
+  spec.build.optimization = "O1";
+  testing::TempDir dir;
+  const GeneratedFunctionLibrary generated = generateFunctionLibrary(model, spec, dir.path() / "out");
+  const codegen::LoadedLibrary library = codegen::LoadedLibrary::open(generated.library);
+  const codegen::CompiledFunction f = library.function(generated.built.definition.name);
+  std::cout << GetParam().robot << " " << fn << " value + Jacobian: " << generated.info.lane_pairs << " pairs in "
+            << generated.info.operations << " operations\n";
+  EXPECT_EQ(generated.built.definition.lane_pairs, codegen::LanePairSeeds::Twins);
+  EXPECT_GT(generated.info.lane_pairs, 0u) << "Talos's legs and arms are twins";
+  for (std::size_t s = 0; s < golden.samples.size(); s += 4) {
+    const auto& g = golden.samples[s];
+    const std::vector<Eigen::VectorXd> out =
+        evaluateBlocks(f, generated.built.definition, {g.q, g.v, rnea ? g.a : g.tau});
+    const Eigen::MatrixXd J = Eigen::Map<const Eigen::MatrixXd>(out[1].data(), 3 * n, n).transpose();
+    EXPECT_TRUE(matricesAgree(out[0], rnea ? g.tau : g.ddq, 1e-9));
+    EXPECT_TRUE(matricesAgree(J.leftCols(n), rnea ? g.dtau_dq : g.dddq_dq, 1e-9));
+    EXPECT_TRUE(matricesAgree(J.middleCols(n, n), rnea ? g.dtau_dv : g.dddq_dv, 1e-9));
+    EXPECT_TRUE(matricesAgree(J.rightCols(n), rnea ? g.M : Eigen::MatrixXd(g.M.inverse()), 1e-9));
   }
 }
 
