@@ -41,7 +41,9 @@ TransferSlots assignTransferSlots(const Graph& g, const std::vector<Step>& steps
     list.pop_back();
     return slot;
   };
-  auto handedOver = [&](NodeId d, std::uint32_t chunk) { return d != kNoPair && last[d] != kNoSlot && last[d] > chunk; };
+  auto handedOver = [&](NodeId d, std::uint32_t chunk) {
+    return d != kNoPair && last[d] != kNoSlot && last[d] > chunk;
+  };
   std::uint32_t current = kNoSlot;
   for (const Step& s : steps) {
     if (s.chunk != current) {
