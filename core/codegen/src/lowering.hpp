@@ -100,7 +100,7 @@ inline constexpr std::uint32_t kLanePairsBelow = kOutputOrderFrom;
 // ran 1.06-2x faster; with 14-24% in pairs, up to 1.15x slower.
 inline constexpr double kLanePairCoverage = 0.3;
 // The same for a derivative function's pairs (seeded at twins only): Talos fixed ABA + J
-// and Euler step + J, 26-27% in pairs, ran 1.09-1.16x faster with them.
+// and Euler step + J, 26-27% in pairs, ran 1.08-1.19x faster with them.
 inline constexpr double kTwinPairCoverage = 0.2;
 
 struct LoweringOptions {
