@@ -6,6 +6,9 @@
 // compiles the same source without pairs. One limb alone gets no pairs.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
+
 #include "codegen_fixtures.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/codegen/compiler.hpp"
@@ -179,6 +182,39 @@ TEST(LanePairs, TwinsInDifferentColumnsArePairedWhenSeededAtTwinsOnly) {
 
   f.lane_pairs = LanePairSeeds::None;
   EXPECT_EQ(generateLibrary(g, {f}).functions.at(0).lane_pairs, 0u);
+}
+
+// Sin and cos of three joint angles (inputs): the first two run in one kernel call in
+// two lanes, the third alone; every value as libm computes it (within 2 ulp), also where
+// one lane is beyond the kernel's range (libm lane by lane).
+TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
+  Graph g;
+  std::vector<NodeId> values;
+  for (std::uint32_t j = 0; j < 3; ++j) {
+    const NodeId q = g.input(j);
+    values.push_back(g.unary(Op::Sin, q));
+    values.push_back(g.unary(Op::Cos, q));
+  }
+  const FunctionDefinition f{"angles", {{"q", 3}}, {OutputBlock::dense("sc", 6, 1, values)}};
+  TempDir dir;
+  const PairedBuild built = buildLimbs(g, f, dir, "angles", {});
+  const std::string source = sourcesOf(built.generated);
+  const std::size_t first = source.find("rd_sincos_pair(p");
+  ASSERT_NE(first, std::string::npos);
+  EXPECT_EQ(source.find("rd_sincos_pair(p", first + 1), std::string::npos) << "one call for two angles";
+  EXPECT_NE(source.find("rd_sincos1("), std::string::npos) << "the third angle alone";
+  const CompiledFunction& fn = built.library.function("angles");
+  using Angles = std::array<double, 3>;
+  for (const Angles& q : {Angles{0.3, -2.5, 7.0}, Angles{1e6, 0.5, -1e7}, Angles{-0.0, 1e-300, 3.0}}) {
+    std::vector<double> out(6), work(fn.workSize() + 1);
+    const double* in[] = {q.data()};
+    double* outs[] = {out.data()};
+    fn.evaluate(in, outs, work.data());
+    for (std::uint32_t j = 0; j < 3; ++j) {
+      EXPECT_TRUE(closeRelative(out[2 * j], std::sin(q[j]), 1e-15)) << q[j] << ": " << out[2 * j];
+      EXPECT_TRUE(closeRelative(out[2 * j + 1], std::cos(q[j]), 1e-15)) << q[j] << ": " << out[2 * j + 1];
+    }
+  }
 }
 
 TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {

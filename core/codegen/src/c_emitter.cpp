@@ -262,6 +262,14 @@ class ChunkPrinter {
       case InstrKind::StoreTransferPair:
         out_ << "  rd_store_pair(w + " << ins.index << ", " << operand(ins.args[0]) << ");\n";
         break;
+      case InstrKind::SinCosPair:
+        for (std::uint32_t slot : {ins.dst, ins.dst2}) {
+          if (declared_pair_[slot]) continue;
+          declared_pair_[slot] = 1;
+          out_ << "  rd_pair p" << slot << ";\n";
+        }
+        out_ << "  rd_sincos_pair(" << operand(ins.args[0]) << ", &p" << ins.dst << ", &p" << ins.dst2 << ");\n";
+        break;
       case InstrKind::SinCos:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {
           if (declared_[slot]) continue;
@@ -463,9 +471,11 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     lib.functions.push_back(info);
 
     ChunkPrinter scalar(f, Flavour::Scalar), vector(f, Flavour::Vector);
-    // The single-knot code of part p: with lane pairs where the compiler has vector types.
+    // The single-knot code of part p: with lane pairs (and sin-cos pairs) where the
+    // compiler has vector types.
+    const bool any_pairs = paired.lane_pairs > 0 || paired.sincos_lane_pairs > 0;
     auto scalarPart = [&](const std::string& signature, std::uint32_t p) {
-      if (paired.lane_pairs == 0) return scalar.print(signature, lowered.chunks[p]);
+      if (!any_pairs) return scalar.print(signature, lowered.chunks[p]);
       return "#if RD_PAIRS\n" + scalar.print(signature, paired.chunks[p]) + "#else\n" +
              scalar.print(signature, lowered.chunks[p]) + "#endif\n";
     };

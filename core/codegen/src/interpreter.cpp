@@ -96,6 +96,7 @@ class Assembler {
       case InstrKind::ComputePair:
       case InstrKind::LoadTransferPair:
       case InstrKind::StoreTransferPair:
+      case InstrKind::SinCosPair:
         throw std::logic_error("interpreter: lane pairs");
     }
   }

@@ -63,4 +63,12 @@ struct Step {
 // every pair still waiting at once.
 std::vector<Step> orderWithPairs(const symbolic::Graph& graph, const std::vector<Step>& steps, LanePairs& pairs);
 
+// A function's lane pairs and the order of its steps with them: pairs chosen both ways
+// (at one depth only, and at any depth then ordered: symmetric limbs pair better one way
+// or the other), the way with more pairs kept, and `steps` reordered with each pair as
+// one step. None (and `steps` untouched) when the function has `below` operations or
+// more, or when the pairs would compute under `coverage` of its operations.
+LanePairs scheduleLanePairs(const symbolic::Graph& graph, const FunctionDefinition& function, double coverage,
+                            std::uint32_t below, std::vector<Step>& steps);
+
 }  // namespace robodiff::codegen::detail

@@ -8,7 +8,6 @@
 #include "emission_order.hpp"
 #include "lane_pairs.hpp"
 #include "operand_ref.hpp"
-#include "shape_signatures.hpp"
 #include "sum_chains.hpp"
 #include "transfer_slots.hpp"
 
@@ -47,6 +46,7 @@ class Lowerer {
     for (const Chunk& c : out.chunks) out.operations += c.operations;
     out.sincos_pairs = sincos_pairs_;
     out.lane_pairs = static_cast<std::uint32_t>(pairs_.count());
+    out.sincos_lane_pairs = sincos_lane_pairs_;
     return out;
   }
 
@@ -173,32 +173,9 @@ class Lowerer {
   // LanePairMode::Order each pair becomes two steps again once the chunks are cut, so
   // that the code without pairs has the same parts and work buffer as the code with them.
   void pairSteps() {
-    std::uint32_t operations = 0;
-    std::vector<char> pairable(n_, 0);
-    for (const Step& s : steps_) {
-      operations += s.second == kNone ? 1 : 2;
-      if (s.second == kNone) pairable[s.first] = 1;
-    }
-    if (operations >= kLanePairsBelow || f_.lane_pairs == LanePairSeeds::None) return;
-    // Pairs at one depth only, and pairs at any depth then ordered (some dissolved):
-    // symmetric limbs pair better one way or the other (Solo-12's ABA 1,400 against 411,
-    // Talos's 2,076 against 3,818). The way with more pairs is kept.
-    std::vector<Step> ordered;
-    const ShapeSignatures shapes(g_, pairable);
-    for (bool same_depth : {true, false}) {
-      LanePairs pairs = chooseLanePairs(g_, f_, pairable, shapes, same_depth);
-      if (pairs.count() <= pairs_.count()) continue;
-      std::vector<Step> order = orderWithPairs(g_, steps_, pairs);
-      if (pairs.count() <= pairs_.count()) continue;
-      pairs_ = std::move(pairs);
-      ordered = std::move(order);
-    }
     const double coverage = f_.lane_pairs == LanePairSeeds::Twins ? kTwinPairCoverage : kLanePairCoverage;
-    if (pairs_.count() == 0 || 2.0 * static_cast<double>(pairs_.count()) < coverage * operations) {
-      pairs_ = LanePairs(n_);
-      return;
-    }
-    steps_ = std::move(ordered);
+    pairs_ = scheduleLanePairs(g_, f_, coverage, kLanePairsBelow, steps_);
+    if (pairs_.count() == 0) return;
     twin_.assign(n_, kNone);
     for (const Step& s : steps_)
       if (s.lane1 != kNone) twin_[s.first] = s.lane1;
@@ -288,6 +265,7 @@ class Lowerer {
       local_chunk_.assign(n_, kNone);
       local_slot_.assign(n_, 0);
       local_lane_.assign(n_, kScalar);
+      computed_early_.assign(n_, 0);
     }
     free_.clear();
     free_pairs_.clear();
@@ -310,7 +288,13 @@ class Lowerer {
     chunk_ = c;
     for (auto it = begin; it != end; ++it) {
       const std::uint32_t pos = static_cast<std::uint32_t>(it - begin);
-      if (it->lane1 == kNone) emitStep(pos, *it, chunk);
+      if (computed_early_[it->first]) {  // a sin and cos computed with an earlier pair's
+        releaseDying(pos, {it->first});
+        continue;
+      }
+      auto partner = it->second == kNone ? end : laterSinCos(it, end);
+      if (partner != end) emitSinCosPair(pos, *it, *partner, chunk);
+      else if (it->lane1 == kNone) emitStep(pos, *it, chunk);
       else emitPairStep(pos, *it, chunk);
     }
     chunk.slots = next_slot_;
@@ -436,6 +420,51 @@ class Lowerer {
     }
   }
 
+  // With lane pairs (LanePairMode::Emit), sin and cos of two arguments run in the two
+  // lanes of one kernel call: a step's sin and cos and those of the next sin-cos step of
+  // the chunk whose argument can be read now (an input, or a value of this chunk already
+  // computed). The kernel is ~35 instructions; a call for two saves one.
+  template <class It> It laterSinCos(It it, It end) const {
+    if (options_.lane_pairs != LanePairMode::Emit) return end;
+    for (It later = it + 1; later != end; ++later) {
+      if (later->second == kNone || later->lane1 != kNone || computed_early_[later->first]) continue;
+      const Ref x = resolve(g_, g_.node(later->first).args[0]);
+      if (x.is_constant || g_.node(x.base).op == Op::Input || local_chunk_[x.base] == chunk_) return later;
+    }
+    return end;
+  }
+  void emitSinCosPair(std::uint32_t pos, const Step& a, const Step& b, Chunk& chunk) {
+    Instr pack;
+    pack.kind = InstrKind::PackPair;
+    pack.args[0] = scalarOperand(resolve(g_, g_.node(a.first).args[0]), chunk);
+    pack.args[1] = scalarOperand(resolve(g_, g_.node(b.first).args[0]), chunk);
+    pack.dst = allocatePair();
+    chunk.code.push_back(pack);
+    releaseDying(pos, {a.first});
+    releasePair(pack.dst);
+    Instr ins;
+    ins.kind = InstrKind::SinCosPair;
+    ins.args[0].kind = Operand::Kind::Pair;
+    ins.args[0].slot = pack.dst;
+    ins.dst = allocatePair();
+    ins.dst2 = allocatePair();
+    pair_live_[ins.dst] = pair_live_[ins.dst2] = 2;
+    const NodeId defined[4] = {a.first, b.first, a.second, b.second};  // sin, sin, cos, cos
+    for (int k = 0; k < 4; ++k) {
+      local_chunk_[defined[k]] = chunk_;
+      local_slot_[defined[k]] = k < 2 ? ins.dst : ins.dst2;
+      local_lane_[defined[k]] = static_cast<std::uint8_t>(k % 2);
+    }
+    chunk.code.push_back(ins);
+    chunk.operations += 2;
+    computed_early_[b.first] = 1;
+    ++sincos_lane_pairs_;
+    for (NodeId d : defined) {
+      afterDefinition(d, chunk);
+      if (lastRead(d) == kNone) kill(d);
+    }
+  }
+
   // Two values handed over by earlier chunks in adjacent slots, x first: loaded at once
   // into the lanes of one pair local.
   void loadTransferredPair(const Ref& x, const Ref& y, Chunk& chunk) {
@@ -541,6 +570,8 @@ class Lowerer {
   std::uint32_t sincos_pairs_ = 0;
   std::vector<std::uint32_t> transfer_slot_;
   std::vector<NodeId> twin_;  // a lane pair's lane-0 node -> its lane-1 node (kNone: none)
+  std::vector<char> computed_early_;  // sin nodes of steps computed with an earlier step's
+  std::uint32_t sincos_lane_pairs_ = 0;
   std::uint32_t transfer_slots_ = 0;
 
   LanePairs pairs_;

@@ -56,6 +56,7 @@ enum class InstrKind : std::uint8_t {
   ComputePair,    // pair dst = op(args), lane by lane (Pair operands)
   LoadTransferPair,   // pair dst = {work[index], work[index + 1]}
   StoreTransferPair,  // {work[index], work[index + 1]} = pair args[0]
+  SinCosPair,         // pair dst = sin(pair args[0]), pair dst2 = cos(pair args[0])
 };
 
 struct Instr {
@@ -86,6 +87,7 @@ struct LoweredFunction {
   std::uint32_t operations = 0;
   std::uint32_t sincos_pairs = 0;
   std::uint32_t lane_pairs = 0;     // ComputePair instructions
+  std::uint32_t sincos_lane_pairs = 0;  // SinCosPair instructions
 };
 
 // Lane pairs (lane_pairs.hpp): Off; Order: the pairs' order without pairs (the code
