@@ -252,13 +252,13 @@ class Chooser {
   // extraction when scalar code reads lane 1 (shuffleCost each).
   void pruneMarginal(const FunctionDefinition& f) {
     const NodeId n = static_cast<NodeId>(g_.size());
+    const double w = shuffleCost(f);
     for (int pass = 0; pass < kMarginalPasses; ++pass) {
       const std::vector<char> scalar_reader = scalarReaders();
       std::vector<double> margin(n, 0.0);
       for (NodeId a = 0; a < n; ++a) {
         if (!pairs_.paired(a) || pairs_.lane(a) != 0) continue;
         const NodeId b = pairs_.partner(a);
-        const double w = shuffleCost(f);
         margin[a] += 1.0 - (scalar_reader[b] ? w : 0.0);
         for (int k = 0; k < 2; ++k) {
           const Ref x = arg(a, k), y = arg(b, pairs_.swapped(b) ? 1 - k : k);
@@ -282,21 +282,16 @@ class Chooser {
   // with every limb): counted at 1, the free-flying Talos's RNEA + J kept 13,657 pairs
   // with 7,232 insertions and ran 10% slower than without pairs; at 1.5, 7,374 pairs
   // with 1,617 insertions, 12% faster (docs/code-generation.md).
-  static double shuffleCost(const FunctionDefinition& f) { return f.lane_pairs == LanePairSeeds::Twins ? 1.5 : 1.0; }
+  static double shuffleCost(const FunctionDefinition& f) {
+    return f.lane_pairs == LanePairSeeds::Twins ? 1.5 : 1.0;
+  }
 
   // Keeps the groups of connected pairs (a pair reading another as its operand) that
   // save at least kMinimumSaving instructions: each pair saves one, each operand built
   // from two scalars costs one, each lane 1 read by scalar code costs an extraction.
   void prune() {
     const NodeId n = static_cast<NodeId>(g_.size());
-    std::vector<char> scalar_reader(n, 0);
-    for (NodeId id = 0; id < n; ++id) {
-      if (!pairable_[id] || pairs_.paired(id)) continue;
-      for (int k = 0; k < symbolic::arity(g_.node(id).op); ++k) {
-        const Ref r = arg(id, k);
-        if (!r.is_constant) scalar_reader[r.base] = 1;
-      }
-    }
+    const std::vector<char> scalar_reader = scalarReaders();
     std::vector<NodeId> parent(n);
     std::iota(parent.begin(), parent.end(), 0);
     auto find = [&](NodeId x) {
