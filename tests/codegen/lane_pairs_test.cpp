@@ -217,6 +217,54 @@ TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
   }
 }
 
+// Seven angles: four in the lanes of one 256-bit kernel call, two in a pair, the last
+// alone; the same bits as the build without lane pairs (the scalar kernel), with angles
+// beyond the kernel's range among them (libm, lane by lane).
+TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
+  constexpr std::uint32_t kAngles = 7;
+  Graph g;
+  std::vector<NodeId> values;
+  for (std::uint32_t j = 0; j < kAngles; ++j) {
+    const NodeId q = g.input(j);
+    values.push_back(g.unary(Op::Sin, q));
+    values.push_back(g.unary(Op::Cos, q));
+  }
+  const FunctionDefinition f{"angles", {{"q", kAngles}}, {OutputBlock::dense("sc", 2 * kAngles, 1, values)}};
+  TempDir dir;
+  const PairedBuild quad = buildLimbs(g, f, dir, "quad", {});
+  const std::string all = sourcesOf(quad.generated);
+  const std::size_t paired = all.find("#if RD_PAIRS\nRD_SCALAR_FN");  // the paired single-knot code
+  ASSERT_NE(paired, std::string::npos) << all;
+  const std::string source = all.substr(paired, all.find("#else", paired) - paired);
+  auto calls = [&](const std::string& call) {
+    std::size_t n = 0;
+    for (std::size_t at = source.find(call); at != std::string::npos; at = source.find(call, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(calls("  rd_sincos_quad(p"), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos_pair(p"), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos1("), 1u) << source;
+  CodegenOptions off;
+  off.lane_pairs = false;
+  const PairedBuild plain = buildLimbs(g, f, dir, "plain", off);
+  EXPECT_EQ(sourcesOf(plain.generated).find("rd_sincos_quad(p"), std::string::npos);
+  using Angles = std::array<double, kAngles>;
+  for (const Angles& q : {Angles{0.3, -2.5, 7.0, 1.25, -0.75, 100.0, 2.0}, Angles{1e6, 0.5, -1e7, 3.0, 0.1, 0.2, 0.3},
+                          Angles{-0.0, 1e-300, 3.0, 0x1p19, -1.5, 1e9, 0.4}}) {
+    std::vector<double> got(2 * kAngles), want(2 * kAngles), work(4096);
+    const double* in[] = {q.data()};
+    double* outs[] = {got.data()};
+    quad.library.function("angles").evaluate(in, outs, work.data());
+    outs[0] = want.data();
+    plain.library.function("angles").evaluate(in, outs, work.data());
+    for (std::uint32_t k = 0; k < 2 * kAngles; ++k) {
+      EXPECT_EQ(got[k], want[k]) << "angle " << q[k / 2] << (k % 2 ? " cos" : " sin");
+      const double exact = k % 2 ? std::cos(q[k / 2]) : std::sin(q[k / 2]);
+      EXPECT_TRUE(closeRelative(got[k], exact, 1e-15) || std::fabs(got[k] - exact) < 1e-300) << q[k / 2];
+    }
+  }
+}
+
 TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {
   Graph g;
   const std::vector<NodeId> values = limbValues(g, 0);

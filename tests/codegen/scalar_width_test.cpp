@@ -65,8 +65,10 @@ TEST(ScalarWidth, AFewHundredStructuralZerosAreStoredWithoutMemset) {
   ASSERT_FALSE(eval.empty()) << "no rd_banded_eval in " << library;
   EXPECT_EQ(eval.find("memset"), std::string::npos) << eval;
   EXPECT_EQ(eval.find("rep stos"), std::string::npos) << eval;
-  if (cpuHasFlag("avx512f")) EXPECT_EQ(eval.find("zmm"), std::string::npos) << eval;
-  if (cpuHasFlag("avx512f")) EXPECT_NE(eval.find("ymm"), std::string::npos) << "no longer four zeros a store";
+  if (cpuHasFlag("avx512f")) {
+    EXPECT_EQ(eval.find("zmm"), std::string::npos) << eval;
+    EXPECT_NE(eval.find("ymm"), std::string::npos) << "no longer four zeros a store";
+  }
 }
 
 }  // namespace

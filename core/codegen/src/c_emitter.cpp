@@ -270,6 +270,15 @@ class ChunkPrinter {
         }
         out_ << "  rd_sincos_pair(" << operand(ins.args[0]) << ", &p" << ins.dst << ", &p" << ins.dst2 << ");\n";
         break;
+      case InstrKind::SinCosQuad:
+        for (std::uint32_t slot : {ins.dst, ins.dst2, ins.dst3, ins.dst4}) {
+          if (declared_pair_[slot]) continue;
+          declared_pair_[slot] = 1;
+          out_ << "  rd_pair p" << slot << ";\n";
+        }
+        out_ << "  rd_sincos_quad(" << operand(ins.args[0]) << ", " << operand(ins.args[1]) << ", &p" << ins.dst << ", &p"
+             << ins.dst2 << ", &p" << ins.dst3 << ", &p" << ins.dst4 << ");\n";
+        break;
       case InstrKind::SinCos:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {
           if (declared_[slot]) continue;

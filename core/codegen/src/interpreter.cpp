@@ -97,6 +97,7 @@ class Assembler {
       case InstrKind::LoadTransferPair:
       case InstrKind::StoreTransferPair:
       case InstrKind::SinCosPair:
+      case InstrKind::SinCosQuad:
         throw std::logic_error("interpreter: lane pairs");
     }
   }

@@ -292,9 +292,8 @@ class Lowerer {
         releaseDying(pos, {it->first});
         continue;
       }
-      auto partner = it->second == kNone ? end : laterSinCos(it, end);
-      if (partner != end) emitSinCosPair(pos, *it, *partner, chunk);
-      else if (it->lane1 == kNone) emitStep(pos, *it, chunk);
+      if (it->second != kNone && emitSinCosLanes(pos, it, end, chunk)) continue;
+      if (it->lane1 == kNone) emitStep(pos, *it, chunk);
       else emitPairStep(pos, *it, chunk);
     }
     chunk.slots = next_slot_;
@@ -420,10 +419,11 @@ class Lowerer {
     }
   }
 
-  // With lane pairs (LanePairMode::Emit), sin and cos of two arguments run in the two
-  // lanes of one kernel call: a step's sin and cos and those of the next sin-cos step of
-  // the chunk whose argument can be read now (an input, or a value of this chunk already
-  // computed). The kernel is ~35 instructions; a call for two saves one.
+  // With lane pairs (LanePairMode::Emit), sin and cos of two or four arguments run in
+  // the lanes of one kernel call (rd_sincos_pair; rd_sincos_quad, 256 bits, for four):
+  // a step's sin and cos and those of the next sin-cos steps of the chunk whose
+  // arguments can be read now (an input, or a value of this chunk already computed).
+  // The kernel is ~35 instructions whatever the lanes.
   template <class It> It laterSinCos(It it, It end) const {
     if (options_.lane_pairs != LanePairMode::Emit) return end;
     for (It later = it + 1; later != end; ++later) {
@@ -433,36 +433,48 @@ class Lowerer {
     }
     return end;
   }
-  void emitSinCosPair(std::uint32_t pos, const Step& a, const Step& b, Chunk& chunk) {
-    Instr pack;
-    pack.kind = InstrKind::PackPair;
-    pack.args[0] = scalarOperand(resolve(g_, g_.node(a.first).args[0]), chunk);
-    pack.args[1] = scalarOperand(resolve(g_, g_.node(b.first).args[0]), chunk);
-    pack.dst = allocatePair();
-    chunk.code.push_back(pack);
-    releaseDying(pos, {a.first});
-    releasePair(pack.dst);
+  // False: no partner, nothing emitted.
+  template <class It> bool emitSinCosLanes(std::uint32_t pos, It it, It end, Chunk& chunk) {
+    const Step* steps[4] = {&*it};
+    std::size_t n = 1;
+    for (It later = laterSinCos(it, end); later != end && n < 4; later = laterSinCos(later, end)) steps[n++] = &*later;
+    if (n == 1) return false;
+    if (n == 3) n = 2;  // a quad's fourth lane idle measured slower than a pair and a lone kernel
     Instr ins;
-    ins.kind = InstrKind::SinCosPair;
-    ins.args[0].kind = Operand::Kind::Pair;
-    ins.args[0].slot = pack.dst;
-    ins.dst = allocatePair();
-    ins.dst2 = allocatePair();
-    pair_live_[ins.dst] = pair_live_[ins.dst2] = 2;
-    const NodeId defined[4] = {a.first, b.first, a.second, b.second};  // sin, sin, cos, cos
-    for (int k = 0; k < 4; ++k) {
-      local_chunk_[defined[k]] = chunk_;
-      local_slot_[defined[k]] = k < 2 ? ins.dst : ins.dst2;
-      local_lane_[defined[k]] = static_cast<std::uint8_t>(k % 2);
+    ins.kind = n == 2 ? InstrKind::SinCosPair : InstrKind::SinCosQuad;
+    for (std::size_t p = 0; 2 * p < n; ++p) {  // the arguments packed two by two
+      Instr pack;
+      pack.kind = InstrKind::PackPair;
+      for (std::size_t l = 0; l < 2; ++l)
+        pack.args[l] = scalarOperand(resolve(g_, g_.node(steps[2 * p + l]->first).args[0]), chunk);
+      pack.dst = allocatePair();
+      chunk.code.push_back(pack);
+      ins.args[p].kind = Operand::Kind::Pair;
+      ins.args[p].slot = pack.dst;
     }
+    releaseDying(pos, {it->first});
+    for (std::size_t p = 0; 2 * p < n; ++p) releasePair(ins.args[p].slot);
+    std::uint32_t* results[4] = {&ins.dst, &ins.dst2, &ins.dst3, &ins.dst4};  // sin, cos of each pack
+    for (std::size_t r = 0; r < n; ++r) *results[r] = allocatePair();
+    for (std::size_t r = 0; r < n; ++r) pair_live_[*results[r]] = 2;
     chunk.code.push_back(ins);
-    chunk.operations += 2;
-    computed_early_[b.first] = 1;
+    chunk.operations += static_cast<std::uint32_t>(n);
     ++sincos_lane_pairs_;
-    for (NodeId d : defined) {
-      afterDefinition(d, chunk);
-      if (lastRead(d) == kNone) kill(d);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k > 0) computed_early_[steps[k]->first] = 1;
+      const NodeId defined[2] = {steps[k]->first, steps[k]->second};  // sin, cos
+      for (int f = 0; f < 2; ++f) {
+        local_chunk_[defined[f]] = chunk_;
+        local_slot_[defined[f]] = *results[2 * (k / 2) + f];
+        local_lane_[defined[f]] = static_cast<std::uint8_t>(k % 2);
+      }
     }
+    for (std::size_t k = 0; k < n; ++k)
+      for (NodeId d : {steps[k]->first, steps[k]->second}) {
+        afterDefinition(d, chunk);
+        if (lastRead(d) == kNone) kill(d);
+      }
+    return true;
   }
 
   // Two values handed over by earlier chunks in adjacent slots, x first: loaded at once

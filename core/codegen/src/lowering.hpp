@@ -57,12 +57,13 @@ enum class InstrKind : std::uint8_t {
   LoadTransferPair,   // pair dst = {work[index], work[index + 1]}
   StoreTransferPair,  // {work[index], work[index + 1]} = pair args[0]
   SinCosPair,         // pair dst = sin(pair args[0]), pair dst2 = cos(pair args[0])
+  SinCosQuad,         // SinCosPair's, and pairs dst3, dst4 of pair args[1], in one call
 };
 
 struct Instr {
   InstrKind kind = InstrKind::Compute;
   symbolic::Op op = symbolic::Op::Constant;  // Compute
-  std::uint32_t dst = 0, dst2 = 0;
+  std::uint32_t dst = 0, dst2 = 0, dst3 = 0, dst4 = 0;
   Operand args[3];
   std::uint32_t block = 0, index = 0;
 };
@@ -87,7 +88,7 @@ struct LoweredFunction {
   std::uint32_t operations = 0;
   std::uint32_t sincos_pairs = 0;
   std::uint32_t lane_pairs = 0;     // ComputePair instructions
-  std::uint32_t sincos_lane_pairs = 0;  // SinCosPair instructions
+  std::uint32_t sincos_lane_pairs = 0;  // SinCosPair and SinCosQuad instructions
 };
 
 // Lane pairs (lane_pairs.hpp): Off; Order: the pairs' order without pairs (the code
