@@ -265,6 +265,20 @@ TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
   }
 }
 
+// What the function builder compares two ways of building by: the single-knot
+// instructions, one per operation less one per lane pair, as the library lowers it.
+TEST(LanePairs, SingleKnotInstructionsCountAPairOnce) {
+  Graph g;
+  const FunctionDefinition f = twoLimbsFunction(g);
+  const GeneratedFunctionInfo info = generateLibrary(g, {f}).functions.at(0);
+  ASSERT_GT(info.lane_pairs, 0u);
+  EXPECT_EQ(singleKnotInstructions(g, f, {}), info.operations - info.lane_pairs);
+  EXPECT_EQ(singleKnotInstructions(g, f, {}), info.operations / 2);  // every operation has its twin
+  CodegenOptions off;
+  off.lane_pairs = false;
+  EXPECT_EQ(singleKnotInstructions(g, f, off), info.operations);
+}
+
 TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {
   Graph g;
   const std::vector<NodeId> values = limbValues(g, 0);

@@ -431,6 +431,17 @@ std::string cDoubleLiteral(double value) {
   return s;
 }
 
+std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const FunctionDefinition& function,
+                                     const CodegenOptions& options) {
+  function.validate(graph);
+  detail::LoweringOptions lo;
+  lo.split_threshold = options.split_threshold;
+  lo.output_order_from = options.output_order_from;
+  lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Emit : detail::LanePairMode::Off;
+  const LoweredFunction lowered = detail::lower(graph, function, lo);
+  return std::uint64_t{lowered.operations} - lowered.lane_pairs;
+}
+
 GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector<FunctionDefinition>& functions,
                                  const CodegenOptions& options) {
   if (functions.empty()) throw std::invalid_argument("generateLibrary: no functions");

@@ -20,7 +20,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.4";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.5";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
@@ -69,6 +69,13 @@ struct GeneratedLibrary {
   std::vector<SourceFile> headers;  // files the sources include (abi.h); -I the build dir
   std::vector<GeneratedFunctionInfo> functions;
 };
+
+// The instructions `function`'s single-knot code issues for its operations, as
+// generateLibrary(graph, {function}, options) lowers it: the operations, less one per
+// lane pair (two operations in the lanes of one vector instruction). Lowers the function
+// (no C is written). What the function builder compares two ways of building by.
+std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const FunctionDefinition& function,
+                                     const CodegenOptions& options);
 
 // The library's sources: one file with every function's entry points and the
 // descriptor, plus one file per part of each split function. Throws

@@ -43,15 +43,21 @@ enum class RneaJacobianMethod {
   Analytic,       // dynamics/rnea_derivatives.hpp traced, the value from the same sweep
   Differentiate,  // reverse/forward-mode differentiation of the traced RNEA
   Cheaper,        // both built; the analytic one kept when it needs at most
-                  // kAnalyticRneaOperationsRatio of the other's operations
+                  // kAnalyticRneaInstructionsRatio of the other's instructions
 };
 
 // The analytic RNEA derivatives keep more values alive across their sweeps (composite
-// inertias and Coriolis composites): their code is faster only when it saves enough
-// operations. Measured on eleven robots (docs/code-generation.md), the analytic code was
-// the faster up to 0.90 of the operations (Bolt, 0.90: 1.86 against 2.07 µs; Solo-12,
-// 0.82: 3.34 against 3.95) and twice as slow at the UR5's 1.18 (0.79 against 0.40).
-inline constexpr double kAnalyticRneaOperationsRatio = 0.95;
+// inertias and Coriolis composites): their code is faster only when it saves enough.
+// Measured on eleven robots without lane pairs (docs/code-generation.md), the analytic
+// code was the faster up to 0.90 of the operations (Bolt, 0.90: 1.86 against 2.07 µs;
+// Solo-12, 0.82: 3.34 against 3.95) and twice as slow at the UR5's 1.18 (0.79 against
+// 0.40). With lane pairs the ways are compared by their single-knot instructions
+// (builtInstructions): where the legs are twins, differentiation pairs more (Solo-12:
+// 8,616 pairs in 19,172 operations, 2.32 µs; analytic 4,087 in 15,853, 2.75 µs). On
+// the seven robots measured both ways (and the UR5, which has no pairs, before), the one
+// with fewer instructions was the faster, the closest Go1's (0.994: 2.70 against 2.85
+// µs), so no margin is left.
+inline constexpr double kAnalyticRneaInstructionsRatio = 1.0;
 
 struct FunctionBuilderOptions {
   std::string name;  // the C name of the function; empty: the spec's function name
@@ -63,7 +69,7 @@ struct FunctionBuilderOptions {
   // The RNEA Jacobian: which method gives faster code depends on the robot (the UR5's
   // aligned axes favour differentiation: 3.7k operations against 4.6k analytic; the
   // Talos goes analytic), so both are built (tracing takes milliseconds) and compared
-  // (kAnalyticRneaOperationsRatio). ABA's partials are faster analytic (Talos ABA
+  // (kAnalyticRneaInstructionsRatio). ABA's partials are faster analytic (Talos ABA
   // Jacobian 8.2 µs against 10.0; Panda 1.49 against 1.47).
   RneaJacobianMethod rnea_jacobian = RneaJacobianMethod::Cheaper;
   RneaJacobianMethod aba_rnea_partials = RneaJacobianMethod::Analytic;  // d RNEA/d(q, v) in ABA's Jacobian
@@ -112,5 +118,10 @@ BuiltFunction buildFunction(const Model& model, const FunctionSpec& spec, const 
 
 // Arithmetic operations the function's outputs need (what its generated code computes).
 std::size_t builtOperations(const BuiltFunction& f);
+
+// The instructions of its single-knot code under the library's default code generation
+// (codegen::singleKnotInstructions): the operations, less one per lane pair. Lowers the
+// function; buildFunction has set the definition's lane-pair seeds.
+std::size_t builtInstructions(const BuiltFunction& f);
 
 }  // namespace robodiff
