@@ -61,17 +61,7 @@ std::string prologue(const CodegenOptions& options) {
        "    for (int l = 0; l < 2; ++l) { double a, b; sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; }\n"
        "    return;\n"
        "  }\n"
-       "#define RD_SC_TYPE rd_pair\n"
-       "#define RD_SC_BITS rd_pair_u\n"
-       "  rd_pair t, r, z, sp, cp;\n"
-       "  RD_SC_REDUCE(x, t, r, z);\n"
-       "  RD_SC_POLY(r, z, sp, cp);\n"
-       "  rd_pair_u q = (rd_pair_u)t, si = (rd_pair_u)sp, ci = (rd_pair_u)cp;\n"
-       "  RD_SC_QUADRANT(q, si, ci);\n"
-       "  *s = (rd_pair)si;\n"
-       "  *c = (rd_pair)ci;\n"
-       "#undef RD_SC_TYPE\n"
-       "#undef RD_SC_BITS\n"
+       "  RD_SC_VECTOR(rd_pair, rd_pair_u, x, *s, *c);\n"
        "}\n"
        "/* The kernel in the four lanes of a 256-bit vector, for two pairs of arguments: as\n"
        "   many instructions as one pair's. Two pair calls where shuffles are missing. */\n"
@@ -87,16 +77,8 @@ std::string prologue(const CodegenOptions& options) {
        "    rd_sincos_pair(x1, s1, c1);\n"
        "    return;\n"
        "  }\n"
-       "#define RD_SC_TYPE rd_quad\n"
-       "#define RD_SC_BITS rd_quad_u\n"
-       "  rd_quad t, r, z, sp, cp;\n"
-       "  RD_SC_REDUCE(x, t, r, z);\n"
-       "  RD_SC_POLY(r, z, sp, cp);\n"
-       "  rd_quad_u q = (rd_quad_u)t, si = (rd_quad_u)sp, ci = (rd_quad_u)cp;\n"
-       "  RD_SC_QUADRANT(q, si, ci);\n"
-       "#undef RD_SC_TYPE\n"
-       "#undef RD_SC_BITS\n"
-       "  const rd_quad s = (rd_quad)si, c = (rd_quad)ci;\n"
+       "  rd_quad s, c;\n"
+       "  RD_SC_VECTOR(rd_quad, rd_quad_u, x, s, c);\n"
        "  *s0 = __builtin_shufflevector(s, s, 0, 1);\n"
        "  *s1 = __builtin_shufflevector(s, s, 2, 3);\n"
        "  *c0 = __builtin_shufflevector(c, c, 0, 1);\n"
@@ -169,17 +151,7 @@ RD_HELPER void rd_sincos(rd_v x, rd_v* s, rd_v* c) {
     RD_LANES { double a, b; sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; }
     return;
   }
-#define RD_SC_TYPE rd_v
-#define RD_SC_BITS rd_u
-  rd_v t, r, z, sp, cp;
-  RD_SC_REDUCE(x, t, r, z);
-  RD_SC_POLY(r, z, sp, cp);
-  rd_u q = (rd_u)t, si = (rd_u)sp, ci = (rd_u)cp;
-  RD_SC_QUADRANT(q, si, ci);
-  *s = (rd_v)si;
-  *c = (rd_v)ci;
-#undef RD_SC_TYPE
-#undef RD_SC_BITS
+  RD_SC_VECTOR(rd_v, rd_u, x, *s, *c);
 }
 RD_HELPER rd_v rd_select(rd_v c, rd_v a, rd_v b) { rd_v r; RD_LANES r[l] = c[l] > 0.0 ? a[l] : b[l]; return r; }
 #endif

@@ -18,7 +18,8 @@
  * bit where the compiler contracts nothing into FMAs.
  *
  * The reduction and the polynomials are macros over any arithmetic type, so the SIMD
- * variant of the generated code (GNU vector extensions) runs the same operations.
+ * variants of the generated code (GNU vector extensions: RD_SC_VECTOR) run the same
+ * operations.
  */
 #ifndef ROBODIFF_CODEGEN_SINCOS_KERNEL_H
 #define ROBODIFF_CODEGEN_SINCOS_KERNEL_H
@@ -36,11 +37,11 @@
 #define RD_SC_LIMIT_BITS 0x4120000000000000ULL /* the bits of 2^19 */
 #define RD_SC_SIGN_BIT 0x8000000000000000ULL
 
-/* x -> t (quadrant in the low bits of its representation), r, z = r^2 */
-#define RD_SC_REDUCE(x, t, r, z)                  \
+/* x -> t (quadrant in the low bits of its representation), r, z = r^2; T their type */
+#define RD_SC_REDUCE(T, x, t, r, z)               \
   do {                                            \
     (t) = (x) * RD_SC_TWO_OVER_PI + RD_SC_ROUNDER; \
-    const RD_SC_TYPE rd_sc_k = (t) - RD_SC_ROUNDER;  \
+    const T rd_sc_k = (t) - RD_SC_ROUNDER;        \
     (r) = (x) - rd_sc_k * RD_SC_PIO2_1;           \
     (r) = (r) - rd_sc_k * RD_SC_PIO2_2;           \
     (r) = (r) - rd_sc_k * RD_SC_PIO2_3;           \
@@ -70,14 +71,28 @@
   } while (0)
 
 /* From the bits of t, sp, cp to those of sin x and cos x: an odd quadrant swaps them;
-   sin is negative in quadrants 2 and 3, cos in 1 and 2. */
-#define RD_SC_QUADRANT(q, si, ci)                               \
+   sin is negative in quadrants 2 and 3, cos in 1 and 2. U: the type of the bits. */
+#define RD_SC_QUADRANT(U, q, si, ci)                            \
   do {                                                          \
-    const RD_SC_BITS rd_sc_swap = -((q) & 1);     \
-    const RD_SC_BITS rd_sc_s = ((si) & ~rd_sc_swap) | ((ci) & rd_sc_swap); \
-    const RD_SC_BITS rd_sc_c = ((ci) & ~rd_sc_swap) | ((si) & rd_sc_swap); \
+    const U rd_sc_swap = -((q) & 1);                            \
+    const U rd_sc_s = ((si) & ~rd_sc_swap) | ((ci) & rd_sc_swap); \
+    const U rd_sc_c = ((ci) & ~rd_sc_swap) | ((si) & rd_sc_swap); \
     (si) = rd_sc_s ^ (((q) & 2) << 62);                         \
     (ci) = rd_sc_c ^ ((((q) + 1) & 2) << 62);                   \
+  } while (0)
+
+/* The kernel on a GNU vector of doubles T (U: a vector of as many uint64s) in every lane
+   at once, no range check: s and c are lvalues of type T. Generated code's pair, quad
+   and batched variants. */
+#define RD_SC_VECTOR(T, U, x, s, c)                                                      \
+  do {                                                                                   \
+    T rd_sc_t, rd_sc_r, rd_sc_z, rd_sc_sp, rd_sc_cp;                                     \
+    RD_SC_REDUCE(T, x, rd_sc_t, rd_sc_r, rd_sc_z);                                       \
+    RD_SC_POLY(rd_sc_r, rd_sc_z, rd_sc_sp, rd_sc_cp);                                    \
+    U rd_sc_q = (U)rd_sc_t, rd_sc_si = (U)rd_sc_sp, rd_sc_ci = (U)rd_sc_cp;              \
+    RD_SC_QUADRANT(U, rd_sc_q, rd_sc_si, rd_sc_ci);                                      \
+    (s) = (T)rd_sc_si;                                                                   \
+    (c) = (T)rd_sc_ci;                                                                   \
   } while (0)
 
 static inline void rd_sincos1(double x, double* s, double* c) {
@@ -85,20 +100,16 @@ static inline void rd_sincos1(double x, double* s, double* c) {
     sincos(x, s, c);
     return;
   }
-#define RD_SC_TYPE double
-#define RD_SC_BITS uint64_t
   double t, r, z, sp, cp;
   uint64_t q, si, ci;
-  RD_SC_REDUCE(x, t, r, z);
+  RD_SC_REDUCE(double, x, t, r, z);
   RD_SC_POLY(r, z, sp, cp);
   memcpy(&q, &t, sizeof q);
   memcpy(&si, &sp, sizeof si);
   memcpy(&ci, &cp, sizeof ci);
-  RD_SC_QUADRANT(q, si, ci);
+  RD_SC_QUADRANT(uint64_t, q, si, ci);
   memcpy(s, &si, sizeof si);
   memcpy(c, &ci, sizeof ci);
-#undef RD_SC_TYPE
-#undef RD_SC_BITS
 }
 
 #endif
