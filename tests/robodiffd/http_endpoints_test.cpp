@@ -71,13 +71,16 @@ TEST(HttpEndpoints, MetricsCountCallsAndReadinessFlipsWhenRoudiStops) {
     EXPECT_EQ(unknown.code, StatusCode::NotFound) << unknown.message;
   }
 
-  // /metrics: the text format, the calls counted (a reply is counted just after it is sent: poll).
+  // /metrics: the text format, the calls counted (a reply is counted just after it is
+  // sent, and its request slot freed after that: poll for both).
   PromText metrics;
   HttpReply page;
   for (int attempt = 0; attempt < 40; ++attempt) {
     page = httpGet(port, "/metrics");
     metrics = parsePrometheusText(page.body);
-    if (metrics.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "NOT_FOUND"}}) == 1.0) break;
+    if (metrics.value("robodiff_requests_total", {{"method", "Evaluate"}, {"status", "NOT_FOUND"}}) == 1.0 &&
+        metrics.value("robodiff_request_queue_depth") == 0.0)
+      break;
     std::this_thread::sleep_for(50ms);
   }
   ASSERT_EQ(page.status, 200) << page.head;
