@@ -29,9 +29,11 @@ const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>
   for (int j = n - 1; j >= 0; --j) {
     const Joint& joint = model.joints[j];
     data.U[j] = rightMultiplySubspace(joint, data.Ia[j]);
-    JointSquare<S> D(joint.nv, joint.nv);
+    JointSquare<S>& D = data.D[j];
     for (int k = 0; k < joint.nv; ++k) D.row(k) = projectVector<S>(joint, data.U[j].col(k)).transpose();
-    data.Dinv[j] = inverseSymmetricPositiveDefinite<S>(D);
+    // A multi-DoF root (a free-flyer's 6 x 6) is solved with D in pass 3; every other
+    // joint needs D^-1 for the update of its parent's inertia.
+    if (joint.parent >= 0 || joint.nv == 1) data.Dinv[j] = inverseSymmetricPositiveDefinite<S>(D);
     JointVector<S> pAproj = projectVector<S>(joint, data.pA[j].toVector());
     for (int k = 0; k < joint.nv; ++k) data.u[j][k] = tau[joint.idx_v + k] - pAproj[k];
     if (joint.parent >= 0) {
@@ -48,7 +50,9 @@ const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>
     const Joint& joint = model.joints[j];
     const int p = joint.parent;
     data.a[j] = data.liMi[j].actInv(p >= 0 ? data.a[p] : a0) + data.c[j];
-    JointVector<S> qdd = data.Dinv[j] * (data.u[j] - data.U[j].transpose() * data.a[j].toVector());
+    const JointVector<S> rhs = data.u[j] - data.U[j].transpose() * data.a[j].toVector();
+    const JointVector<S> qdd = p < 0 && joint.nv > 1 ? solveSymmetricPositiveDefinite<S>(data.D[j], rhs)
+                                                      : JointVector<S>(data.Dinv[j] * rhs);
     for (int k = 0; k < joint.nv; ++k) data.ddq[joint.idx_v + k] = qdd[k];
     data.a[j] += jointMotion<S>(joint, data.ddq);
   }

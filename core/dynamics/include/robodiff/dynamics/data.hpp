@@ -73,10 +73,11 @@ template <class S> struct Data {
         tau(VecX<S>::Zero(model.nv)), ddq(VecX<S>::Zero(model.nv)),
         M(MatX<S>::Zero(model.nv, model.nv)), J(Matrix6X<S>::Zero(6, model.nv)), Ag(Matrix6X<S>::Zero(6, model.nv)),
         Ycrb(model.njoints()), Ia(model.njoints()), pA(model.njoints()),
-        U(model.njoints()), Dinv(model.njoints()), u(model.njoints()) {
+        U(model.njoints()), D(model.njoints()), Dinv(model.njoints()), u(model.njoints()) {
     for (int j = 0; j < model.njoints(); ++j) {
       int nv = model.joints[j].nv;
       U[j].resize(6, nv);
+      D[j].resize(nv, nv);
       Dinv[j].resize(nv, nv);
       u[j].resize(nv);
     }
@@ -99,7 +100,8 @@ template <class S> struct Data {
   std::vector<Mat6<S>> Ia;           // ABA: articulated inertias
   std::vector<Force<S>> pA;          // ABA: bias forces
   std::vector<JointBlock<S>> U;
-  std::vector<JointSquare<S>> Dinv;
+  std::vector<JointSquare<S>> D;     // ABA: S^T Ia S, the joint-space articulated inertia
+  std::vector<JointSquare<S>> Dinv;  // its inverse (but for a multi-DoF root, which is solved with D)
   std::vector<JointVector<S>> u;
 
   Vec3<S> com = Vec3<S>::Zero();

@@ -1,5 +1,6 @@
 // Inverse of a small symmetric positive-definite matrix by an unpivoted Cholesky
-// factorisation: no branches on values, so symbolic scalars trace it unchanged.
+// factorisation, and a solve with one by an unpivoted LDL^T factorisation: no branches on
+// values, so symbolic scalars trace them unchanged.
 #pragma once
 
 #include "robodiff/spatial/math.hpp"
@@ -35,6 +36,41 @@ template <class S, class M> M inverseSymmetricPositiveDefinite(const M& a) {
     }
   }
   return Linv.transpose() * Linv;
+}
+
+// x = a^-1 b by a = L D L^T (L unit lower triangular): one division per pivot and no
+// square root, so a chain of pivots is a division and multiply-adds each, and the
+// substitutions are multiply-adds only. Where only a^-1 b is needed this is a far
+// shorter critical path than inverseSymmetricPositiveDefinite's (a floating base's
+// root solve in ABA).
+template <class S, class M, class V> V solveSymmetricPositiveDefinite(const M& a, const V& b) {
+  const Eigen::Index n = a.rows();
+  M L = M::Zero(n, n);  // strictly lower part: L; W below holds L(i, j) d_j
+  M W = M::Zero(n, n);
+  V dinv(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    S d = a(j, j);
+    for (Eigen::Index k = 0; k < j; ++k) d -= W(j, k) * L(j, k);
+    dinv[j] = S(1) / d;
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      S w = a(i, j);
+      for (Eigen::Index k = 0; k < j; ++k) w -= W(i, k) * L(j, k);
+      W(i, j) = w;
+      L(i, j) = w * dinv[j];
+    }
+  }
+  V x(n);
+  for (Eigen::Index i = 0; i < n; ++i) {  // L y = b
+    S y = b[i];
+    for (Eigen::Index k = 0; k < i; ++k) y -= L(i, k) * x[k];
+    x[i] = y;
+  }
+  for (Eigen::Index i = n - 1; i >= 0; --i) {  // D L^T x = y
+    S s = x[i] * dinv[i];
+    for (Eigen::Index k = i + 1; k < n; ++k) s -= L(k, i) * x[k];
+    x[i] = s;
+  }
+  return x;
 }
 
 }  // namespace robodiff
