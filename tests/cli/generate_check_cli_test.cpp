@@ -229,7 +229,7 @@ TEST(CheckCli, PrintsATableAndFailsWithStatus2) {
   // A compiler ($CC) that swaps the q input for v in the generated code before compiling.
   const fs::path cc =
       tmp.script("sabotage-cc",
-                 "for a in \"$@\"; do case \"$a\" in *.c) sed -i 's/i0 = in\\[0\\];/i0 = in[1];/' \"$a\";; esac; done\n"
+                 "for a in \"$@\"; do case \"$a\" in *.c) sed -i 's/in\\[0\\]/in[1]/g' \"$a\";; esac; done\n"
                  "exec cc \"$@\"\n");
   r = runCommand("CC=" + shellQuote(cc.string()) + " " +
                  cli("check " + arm7().args + " --spec " + shellQuote(spec.string()) + " --samples 2"));

@@ -192,7 +192,7 @@ TEST_F(UserSpecCli, GenerateThenCheckPerOutputAndFailWithStatus2) {
   // A compiler ($CC) that reads input block v where the code reads q: check fails, status 2.
   const fs::path cc =
       tmp_.script("sabotage-cc",
-                  "for a in \"$@\"; do case \"$a\" in *.c) sed -i 's/i0 = in\\[0\\];/i0 = in[1];/' \"$a\";; esac; done\n"
+                  "for a in \"$@\"; do case \"$a\" in *.c) sed -i 's/in\\[0\\]/in[1]/g' \"$a\";; esac; done\n"
                   "exec cc \"$@\"\n");
   r = runCommand("CC=" + shellQuote(cc.string()) + " " +
                  runCli("check " + arm7Path() + " --spec " + shellQuote(spec_.string()) + " --samples 2"));

@@ -7,11 +7,13 @@
 #include <stdexcept>
 
 #include "c_prologue.hpp"
+#include "compact_addressing.hpp"
 #include "lowering.hpp"
 
 namespace robodiff::codegen {
 namespace {
 
+using detail::CompactAddressing;
 using detail::Chunk;
 using detail::Instr;
 using detail::InstrKind;
@@ -79,7 +81,22 @@ class ChunkPrinter {
 
   // `signature` is the function's declaration up to, not including, the body.
   // `first`: the function's first chunk, where the batched flavour claims its outputs.
-  std::string print(const std::string& signature, const Chunk& chunk, bool first = false) {
+  // `compact`: not empty, the body is addressed compactly (compact_addressing.hpp): its
+  // constants in the table `compact`_k, the body itself in the function `compact`_body.
+  std::string print(const std::string& signature, const Chunk& chunk, bool first = false,
+                    const std::string& compact = "") {
+    if (compact.empty()) return printOnce(signature, chunk, first, "");
+    CompactAddressing addressing;
+    compact_ = &addressing;
+    printOnce(signature, chunk, first, compact);  // counts the accesses
+    addressing.plan();
+    std::string text = addressing.table(compact + "_k") + printOnce(signature, chunk, first, compact);
+    compact_ = nullptr;
+    return text;
+  }
+
+ private:
+  std::string printOnce(const std::string& signature, const Chunk& chunk, bool first, const std::string& compact) {
     out_.str("");
     declared_.assign(chunk.slots, 0);
     declared_pair_.assign(chunk.pair_slots, 0);
@@ -100,6 +117,10 @@ class ChunkPrinter {
           claimed.insert(b);
           out_blocks.insert(b);
         }
+    if (compact_) {
+      printCompactBody(signature, chunk, compact, in_blocks, out_blocks, uses_work);
+      return out_.str();
+    }
     out_ << signature << " {\n";
     for (std::uint32_t b : in_blocks) out_ << "  const double* restrict i" << b << " = in[" << b << "];\n";
     for (std::uint32_t b : out_blocks) out_ << "  double* restrict o" << b << " = out[" << b << "];\n";
@@ -119,12 +140,58 @@ class ChunkPrinter {
     return out_.str();
   }
 
- private:
+  // A compactly addressed body: a function `compact`_body taking the arrays and the base
+  // pointers as restrict parameters, called by `signature`.
+  void printCompactBody(const std::string& signature, const Chunk& chunk, const std::string& compact,
+                        const std::set<std::uint32_t>& in_blocks, const std::set<std::uint32_t>& out_blocks,
+                        bool uses_work) {
+    std::vector<std::string> parameters, arguments;
+    for (std::uint32_t b : in_blocks) {
+      parameters.push_back("const double* restrict i" + std::to_string(b));
+      arguments.push_back("in[" + std::to_string(b) + "]");
+    }
+    for (std::uint32_t b : out_blocks) {
+      parameters.push_back("double* restrict o" + std::to_string(b));
+      arguments.push_back("out[" + std::to_string(b) + "]");
+    }
+    if (uses_work) {
+      parameters.push_back("double* restrict w");
+      arguments.push_back("w");
+    }
+    for (const std::string& p : compact_->parameters()) parameters.push_back(p);
+    for (const std::string& a : compact_->arguments(compact + "_k")) arguments.push_back(a);
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+      return s.empty() ? std::string("void") : s;
+    };
+    out_ << "RD_NOIPA RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " << compact << "_body(" << list(parameters) << ");\n"
+         << "RD_NOIPA RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " << compact << "_body(" << list(parameters) << ") {\n";
+    for (const Instr& ins : chunk.code) printInstr(ins, chunk);
+    out_ << "}\n"
+         << signature << " {\n"
+         << "  (void)in;\n  (void)out;\n  (void)w;\n"
+         << "  " << compact << "_body(" << (arguments.empty() ? "" : list(arguments)) << ");\n"
+         << "}\n";
+  }
+
   bool vector() const { return flavour_ == Flavour::Vector; }
   static std::string localName(std::uint32_t slot) {
     return cat("t", std::to_string(slot));
   }
   const char* type() const { return vector() ? "rd_v" : "double"; }
+
+  // An array's element, its address, a constant: through the compact addressing, if any.
+  std::string element(const std::string& array, std::uint32_t index) const {
+    return compact_ ? compact_->element(array, index) : cat(array, "[", std::to_string(index), "]");
+  }
+  std::string address(const std::string& array, std::uint32_t index, std::uint32_t width) const {
+    return compact_ ? compact_->address(array, index, width) : cat(array, " + ", std::to_string(index));
+  }
+  std::string literal(double value) const {
+    const std::string text = cDoubleLiteral(value);
+    return compact_ ? compact_->constant(text) : text;
+  }
 
   // "rd_pair p3 = " the first time a pair local is assigned, "p3 = " after.
   std::string assignPair(std::uint32_t slot) {
@@ -153,15 +220,15 @@ class ChunkPrinter {
       case Operand::Kind::Pair:
         return cat(o.negated ? "-" : "", "p", std::to_string(o.slot));
       case Operand::Kind::Constant: {
-        std::string lit = cDoubleLiteral(o.value);
-        return vector() && helper_argument ? "rd_splat(" + lit + ")" : lit;
+        if (vector()) return helper_argument ? "rd_splat(" + cDoubleLiteral(o.value) + ")" : cDoubleLiteral(o.value);
+        return literal(o.value);
       }
       case Operand::Kind::Input: {
         const char* sign = o.negated ? "-" : "";
         if (vector())
           return cat(sign, "rd_gather(i", std::to_string(o.block), " + ", std::to_string(o.index), ", ",
                      std::to_string(f_.inputs[o.block].size), ")");
-        return cat(sign, "i", std::to_string(o.block), "[", std::to_string(o.index), "]");
+        return sign + element("i" + std::to_string(o.block), o.index);
       }
     }
     return {};
@@ -170,7 +237,8 @@ class ChunkPrinter {
   // An operand of + or - as its magnitude and whether it is negated, so that the sign
   // folds into the operator (a - b, not a + -b).
   std::pair<std::string, bool> signedOperand(const Operand& o) const {
-    if (o.kind == Operand::Kind::Constant) return {cDoubleLiteral(std::fabs(o.value)), std::signbit(o.value)};
+    if (o.kind == Operand::Kind::Constant)
+      return {vector() ? cDoubleLiteral(std::fabs(o.value)) : literal(std::fabs(o.value)), std::signbit(o.value)};
     Operand m = o;
     m.negated = false;
     return {operand(m), o.negated};
@@ -222,13 +290,16 @@ class ChunkPrinter {
     std::uint32_t zeros = 0;
     for (const ZeroRun& r : runs) zeros += r.length;
     if (zeros > kStoredZerosMaximum) {
-      out_ << "  memset(o" << block << ", 0, " << f_.outputs[block].size() << " * sizeof(double));\n";
+      const std::uint32_t size = f_.outputs[block].size();
+      if (compact_) compact_->whole("o" + std::to_string(block), size);
+      out_ << "  memset(o" << block << ", 0, " << size << " * sizeof(double));\n";
       return;
     }
     for (const ZeroRun& r : runs) {
       std::uint32_t k = r.start;
-      for (; k + 4 <= r.start + r.length; k += 4) out_ << "  RD_ZERO4(o" << block << " + " << k << ");\n";
-      for (; k < r.start + r.length; ++k) out_ << "  o" << block << "[" << k << "] = 0.0;\n";
+      const std::string o = "o" + std::to_string(block);
+      for (; k + 4 <= r.start + r.length; k += 4) out_ << "  RD_ZERO4(" << address(o, k, 4) << ");\n";
+      for (; k < r.start + r.length; ++k) out_ << "  " << element(o, k) << " = 0.0;\n";
     }
   }
 
@@ -239,12 +310,12 @@ class ChunkPrinter {
         if (vector())
           out_ << "rd_gather(i" << ins.block << " + " << ins.index << ", " << f_.inputs[ins.block].size << ");\n";
         else
-          out_ << "i" << ins.block << "[" << ins.index << "];\n";
+          out_ << element("i" + std::to_string(ins.block), ins.index) << ";\n";
         break;
       case InstrKind::LoadTransfer:
         out_ << "  " << assign(ins.dst);
         if (vector()) out_ << "rd_loadu(w + " << ins.index << " * RD_W);\n";
-        else out_ << "w[" << ins.index << "];\n";
+        else out_ << element("w", ins.index) << ";\n";
         break;
       case InstrKind::Compute:
         out_ << "  " << assign(ins.dst) << expression(ins) << ";\n";
@@ -257,10 +328,10 @@ class ChunkPrinter {
         out_ << "  " << assignPair(ins.dst) << expression(ins) << ";\n";
         break;
       case InstrKind::LoadTransferPair:
-        out_ << "  " << assignPair(ins.dst) << "rd_load_pair(w + " << ins.index << ");\n";
+        out_ << "  " << assignPair(ins.dst) << "rd_load_pair(" << address("w", ins.index, 2) << ");\n";
         break;
       case InstrKind::StoreTransferPair:
-        out_ << "  rd_store_pair(w + " << ins.index << ", " << operand(ins.args[0]) << ");\n";
+        out_ << "  rd_store_pair(" << address("w", ins.index, 2) << ", " << operand(ins.args[0]) << ");\n";
         break;
       case InstrKind::SinCosPair:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {
@@ -293,7 +364,7 @@ class ChunkPrinter {
           out_ << "  rd_scatter(o" << ins.block << " + " << ins.index << ", " << f_.outputs[ins.block].size() << ", "
                << operand(ins.args[0], true) << ");\n";
         else
-          out_ << "  o" << ins.block << "[" << ins.index << "] = " << operand(ins.args[0]) << ";\n";
+          out_ << "  " << element("o" + std::to_string(ins.block), ins.index) << " = " << operand(ins.args[0]) << ";\n";
         break;
       case InstrKind::ZeroOutput:
         if (vector())  // the chunk's RD_W knots are consecutive
@@ -303,7 +374,7 @@ class ChunkPrinter {
         break;
       case InstrKind::StoreTransfer:
         if (vector()) out_ << "  rd_storeu(w + " << ins.index << " * RD_W, " << operand(ins.args[0]) << ");\n";
-        else out_ << "  w[" << ins.index << "] = " << operand(ins.args[0]) << ";\n";
+        else out_ << "  " << element("w", ins.index) << " = " << operand(ins.args[0]) << ";\n";
         break;
     }
   }
@@ -312,6 +383,7 @@ class ChunkPrinter {
   Flavour flavour_;
   std::ostringstream out_;
   std::vector<char> declared_, declared_pair_;
+  CompactAddressing* compact_ = nullptr;  // during print() of a compactly addressed body
 };
 
 const char* kEvalParams = "(const double* const* in, double* const* out, double* w)";
@@ -494,10 +566,14 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     // The single-knot code of part p: with lane pairs (and sin-cos pairs) where the
     // compiler has vector types.
     const bool any_pairs = paired.lane_pairs > 0 || paired.sincos_lane_pairs > 0;
+    const std::uint64_t instructions =
+        any_pairs ? std::uint64_t{paired.operations} - paired.lane_pairs : lowered.operations;
+    const bool compact = options.compact_addressing_from > 0 && instructions >= options.compact_addressing_from;
     auto scalarPart = [&](const std::string& signature, std::uint32_t p) {
-      if (!any_pairs) return scalar.print(signature, lowered.chunks[p]);
-      return "#if RD_PAIRS\n" + scalar.print(signature, paired.chunks[p]) + "#else\n" +
-             scalar.print(signature, lowered.chunks[p]) + "#endif\n";
+      const std::string table = compact ? prefix + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
+      if (!any_pairs) return scalar.print(signature, lowered.chunks[p], false, table);
+      return "#if RD_PAIRS\n" + scalar.print(signature, paired.chunks[p], false, table) + "#else\n" +
+             scalar.print(signature, lowered.chunks[p], false, table) + "#endif\n";
     };
     const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
     main << "/* ---- " << f.name << ": " << lowered.operations << " operations, " << parts << " part(s) ---- */\n\n";

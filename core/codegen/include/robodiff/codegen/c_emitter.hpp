@@ -20,13 +20,19 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.7";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.8";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
 // four functions of the free-flying Talos of 72k-137k operations ran 7-21% faster so,
 // seven functions of 1k-47k operations 4-15% slower.
 inline constexpr std::uint32_t kOutputOrderFrom = 60000;
+
+// Functions whose single-knot code issues at least this many instructions (operations
+// less lane pairs) address their arrays and constants compactly (src/compact_addressing.hpp):
+// their code no longer fits the instruction cache and runs at the speed it streams in.
+// Below, it fits, and the base pointers only take registers (docs/code-generation.md).
+inline constexpr std::uint64_t kCompactAddressingFrom = 4500;
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
@@ -45,6 +51,9 @@ struct CodegenOptions {
   // Single-knot code computes isomorphic operations in pairs, in the two lanes of a
   // 128-bit vector (where the compiler has GNU vector extensions).
   bool lane_pairs = true;
+  // Single-knot instructions from which arrays and constants are addressed compactly;
+  // 0: never.
+  std::uint64_t compact_addressing_from = kCompactAddressingFrom;
 };
 
 struct SourceFile {
