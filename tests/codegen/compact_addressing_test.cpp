@@ -3,7 +3,8 @@
 // constants through a table, in a body that takes them as restrict parameters. The plan
 // keeps every element behind one pointer (what restrict promises the compiler); the
 // generated code computes what the graph computes, with far fewer four-byte
-// displacements than the same function addressed plainly.
+// displacements than the same function addressed plainly, and (having no lane pairs) in
+// parts of half the split threshold.
 #include <gtest/gtest.h>
 
 #include <regex>
@@ -126,6 +127,7 @@ TEST(CompactAddressing, ALargeSplitFunctionComputesTheSameWithFewerLongDisplacem
   CompilerOptions compiler;
   compiler.native = true;
   std::map<bool, std::size_t> long_displacements;
+  std::map<bool, std::uint32_t> parts_of;
   for (bool compact : {false, true}) {
     CodegenOptions options;
     options.split_threshold = 400;
@@ -148,7 +150,7 @@ TEST(CompactAddressing, ALargeSplitFunctionComputesTheSameWithFewerLongDisplacem
         for (std::size_t i = 0; i < expected[b].size(); ++i)
           EXPECT_TRUE(closeRelative(out[b][i], expected[b][i], 1e-12)) << name << " block " << b << " entry " << i;
     }
-    const std::uint32_t parts = generated.functions.at(0).parts;
+    const std::uint32_t parts = parts_of[compact] = generated.functions.at(0).parts;
     ASSERT_GE(parts, 4u);
     for (std::uint32_t p = 0; p < parts; ++p)
       long_displacements[compact] +=
@@ -156,6 +158,8 @@ TEST(CompactAddressing, ALargeSplitFunctionComputesTheSameWithFewerLongDisplacem
   }
   std::cout << "long displacements: " << long_displacements[false] << " plain, " << long_displacements[true]
             << " compact\n";
+  // No lane pairs: the compact build is cut into parts of half the split threshold.
+  EXPECT_GE(parts_of[true], 2 * parts_of[false] - 1);
   EXPECT_GT(long_displacements[false], 100u);
   EXPECT_LT(2 * long_displacements[true], long_displacements[false]);
 }
