@@ -12,6 +12,17 @@
 
 namespace robodiff {
 
+// ia - udinv u^T, the articulated inertia a joint hands its parent, for a symmetric ia
+// (udinv = U D^-1): computed on and below the diagonal and mirrored, so that a traced
+// result holds each entry once (the full product is 15 entries and 30 operations more).
+template <class S>
+Mat6<S> articulatedUpdate(const Mat6<S>& ia, const JointBlock<S>& udinv, const JointBlock<S>& u) {
+  Mat6<S> out;
+  for (int c = 0; c < 6; ++c)
+    for (int r = c; r < 6; ++r) out(r, c) = out(c, r) = ia(r, c) - udinv.row(r).dot(u.row(c));
+  return out;
+}
+
 template <class S, class Q, class V, class T>
 const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v,
                    const Eigen::MatrixBase<T>& tau, const std::vector<Force<S>>* fext = nullptr) {
@@ -38,7 +49,7 @@ const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>
     for (int k = 0; k < joint.nv; ++k) data.u[j][k] = tau[joint.idx_v + k] - pAproj[k];
     if (joint.parent >= 0) {
       JointBlock<S> UDinv = data.U[j] * data.Dinv[j];
-      Mat6<S> Ia = data.Ia[j] - UDinv * data.U[j].transpose();
+      const Mat6<S> Ia = articulatedUpdate(data.Ia[j], UDinv, data.U[j]);
       Vec6<S> pa = data.pA[j].toVector() + Ia * data.c[j].toVector() + UDinv * data.u[j];
       data.Ia[joint.parent] += data.liMi[j].actOnSymmetric(Ia);
       data.pA[joint.parent] += data.liMi[j].act(Force<S>::fromVector(pa));

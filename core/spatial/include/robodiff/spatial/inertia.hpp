@@ -50,7 +50,11 @@ template <class S> struct Inertia {
     m.template block<3, 3>(0, 0) = mass * Mat3<S>::Identity();
     m.template block<3, 3>(0, 3) = -mcx;
     m.template block<3, 3>(3, 0) = mcx;
-    m.template block<3, 3>(3, 3) = inertia - mcx * cx;
+    // Symmetric to the last bit (each entry once, on and above the diagonal): a traced
+    // articulated inertia built on it then stays symmetric node for node.
+    const Mat3<S> about_origin = inertia - mcx * cx;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) m(3 + i, 3 + j) = m(3 + j, 3 + i) = about_origin(i, j);
     return m;
   }
 

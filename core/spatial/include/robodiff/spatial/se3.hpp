@@ -63,16 +63,21 @@ template <class S> struct SE3 {
 
   // The 6x6 matrix of a symmetric spatial operator (inertia, articulated inertia)
   // expressed in b, re-expressed in a: X^T Y X with X the motion transform a -> b.
+  // The symmetric blocks are computed on and above the diagonal and mirrored, so that a
+  // traced result is symmetric node for node (and costs 6 entries, not 9, per block).
   Mat6<S> actOnSymmetric(const Mat6<S>& y) const {
     const Mat3<S>& r = rotation;
-    Mat3<S> a = r * y.template block<3, 3>(0, 0) * r.transpose();
-    Mat3<S> b = r * y.template block<3, 3>(0, 3) * r.transpose();
-    Mat3<S> c = r * y.template block<3, 3>(3, 3) * r.transpose();
-    Mat3<S> px = skew<S>(translation);
+    const Mat3<S> a = upperTimesMirrored(r * y.template block<3, 3>(0, 0), r);
+    const Mat3<S> b = r * y.template block<3, 3>(0, 3) * r.transpose();
+    const Mat3<S> c = upperTimesMirrored(r * y.template block<3, 3>(3, 3), r);
+    const Mat3<S> px = skew<S>(translation);
     // Shift of the moment reference point from b's origin to a's origin.
-    Mat3<S> b2 = b - a * px;
-    Mat3<S> pb = px * b;
-    Mat3<S> c2 = c + pb + pb.transpose() - px * a * px;
+    const Mat3<S> b2 = b - a * px;
+    const Mat3<S> pb = px * b;
+    const Mat3<S> pa = px * a;  // c2 = c + pb + pb^T - px a px
+    Mat3<S> c2;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) c2(i, j) = c2(j, i) = c(i, j) + pb(i, j) + pb(j, i) - pa.row(i).dot(px.col(j));
     Mat6<S> out;
     out.template block<3, 3>(0, 0) = a;
     out.template block<3, 3>(0, 3) = b2;
@@ -82,6 +87,15 @@ template <class S> struct SE3 {
   }
 
  private:
+  // t m^T for a product known to be symmetric: the entries on and above the diagonal,
+  // mirrored below.
+  static Mat3<S> upperTimesMirrored(const Mat3<S>& t, const Mat3<S>& m) {
+    Mat3<S> out;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = t.row(i).dot(m.row(j));
+    return out;
+  }
+
   // Applies `action` to every column of m read as a spatial vector of type V.
   template <class V, class Derived, class Action>
   static Matrix6X<S> mapColumns(const Eigen::MatrixBase<Derived>& m, Action action) {
