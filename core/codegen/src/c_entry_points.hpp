@@ -1,0 +1,25 @@
+// What a generated library has around its functions' bodies: the batched entry point of
+// each function and the descriptor tables the ABI (abi.h) reads.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "robodiff/codegen/function_definition.hpp"
+
+namespace robodiff::codegen::detail {
+
+// The parameters of every single-knot entry point and part.
+extern const char* const kEvalParams;
+
+// `s` as a C string literal (quotes, backslashes and non-printable bytes escaped).
+std::string cString(const std::string& s);
+
+// `prefix`_eval_batch: n knots, RD_W at a time through `prefix`_chunk where the target
+// has vector types, the rest (or everything) through `prefix`_eval.
+std::string batchEntry(const FunctionDefinition& f, const std::string& prefix, std::uint32_t transfer);
+
+// The function's input and output descriptors (and a sparse block's CSR pattern).
+std::string descriptorTables(const FunctionDefinition& f, const std::string& prefix);
+
+}  // namespace robodiff::codegen::detail
