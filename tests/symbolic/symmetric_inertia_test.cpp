@@ -23,6 +23,14 @@ Model humanoid(RootJoint root) {
   return loadUrdfString(generateRobotUrdf(o), root, "humanoid");
 }
 
+// A symmetric 6 x 6 whose 21 entries on and above the diagonal are x[0..20].
+Mat6<Sym> symmetricOf(const VecX<Sym>& x) {
+  Mat6<Sym> m;
+  for (int r = 0, k = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c, ++k) m(r, c) = m(c, r) = x[k];
+  return m;
+}
+
 TEST(SymmetricInertia, ArticulatedInertiasAreSymmetricNodeForNode) {
   for (RootJoint root : {RootJoint::Fixed, RootJoint::FreeFlyer}) {
     const Model model = humanoid(root);
@@ -44,9 +52,7 @@ TEST(SymmetricInertia, TheArticulatedUpdateIsSymmetricNodeForNode) {
   Graph graph;
   Tracer tracer(graph);
   const VecX<Sym> x = tracer.addInputs("x", 21 + 6);
-  Mat6<Sym> ia;
-  for (int r = 0, k = 0; r < 6; ++r)
-    for (int c = r; c < 6; ++c, ++k) ia(r, c) = ia(c, r) = x[k];
+  const Mat6<Sym> ia = symmetricOf(x);
   JointBlock<Sym> u(6, 1);
   for (int r = 0; r < 6; ++r) u(r, 0) = ia(r, 5);  // a revolute joint about z
   const JointBlock<Sym> udinv = u / ia(5, 5);
@@ -62,9 +68,7 @@ TEST(SymmetricInertia, ActOnSymmetricKeepsASymmetricMatrixSymmetricAndEqualsTheF
   Graph graph;
   Tracer tracer(graph);
   const VecX<Sym> x = tracer.addInputs("x", 21 + 6);
-  Mat6<Sym> y;
-  for (int r = 0, k = 0; r < 6; ++r)
-    for (int c = r; c < 6; ++c, ++k) y(r, c) = y(c, r) = x[k];
+  const Mat6<Sym> y = symmetricOf(x);
   const SE3<Sym> m{Eigen::AngleAxis<double>(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix().cast<Sym>(),
                    Vec3<Sym>(x[21], x[22], x[23])};
   const Mat6<Sym> out = m.actOnSymmetric(y);
