@@ -7,6 +7,7 @@
 #include <iostream>
 #include <random>
 #include <tuple>
+#include <utility>
 
 #include <Eigen/LU>
 
@@ -34,6 +35,15 @@ FunctionSpec jacobianSpec(ModelFunction fn) {
 }
 
 std::size_t operations(const BuiltFunction& f) { return builtOperations(f); }
+
+// The RNEA Jacobian built with the analytic partials and by differentiation.
+std::pair<BuiltFunction, BuiltFunction> rneaJacobianBothWays(const Model& model) {
+  FunctionBuilderOptions analytic, differentiate;
+  analytic.rnea_jacobian = RneaJacobianMethod::Analytic;
+  differentiate.rnea_jacobian = RneaJacobianMethod::Differentiate;
+  const FunctionSpec spec = jacobianSpec(ModelFunction::Rnea);
+  return {buildFunction(model, spec, analytic), buildFunction(model, spec, differentiate)};
+}
 
 class Golden : public ::testing::TestWithParam<std::string> {};
 
@@ -100,11 +110,7 @@ TEST(RneaJacobian, TheCheaperOfAnalyticAndDifferentiatedIsKeptAndBothAgree) {
     const testing::GoldenRobot golden = testing::loadGolden(shared, name);
     const Model model = loadUrdfFile(golden.urdf.string(), golden.free_flyer ? RootJoint::FreeFlyer : RootJoint::Fixed);
     const FunctionSpec spec = jacobianSpec(ModelFunction::Rnea);
-    FunctionBuilderOptions analytic_options, differentiate_options;
-    analytic_options.rnea_jacobian = RneaJacobianMethod::Analytic;
-    differentiate_options.rnea_jacobian = RneaJacobianMethod::Differentiate;
-    const BuiltFunction analytic = buildFunction(model, spec, analytic_options);
-    const BuiltFunction differentiated = buildFunction(model, spec, differentiate_options);
+    const auto [analytic, differentiated] = rneaJacobianBothWays(model);
     const BuiltFunction chosen = buildFunction(model, spec);
     const std::size_t analytic_cost = builtInstructions(analytic), differentiated_cost = builtInstructions(differentiated);
     std::cout << name << " RNEA value + Jacobian: analytic " << operations(analytic) << " operations, "
@@ -169,11 +175,7 @@ std::string twinLeggedQuadrupedUrdf() {
 TEST(RneaJacobian, TwinLegsAreComparedByInstructionsNotOperations) {
   const Model model = loadUrdfString(twinLeggedQuadrupedUrdf(), RootJoint::FreeFlyer, "twin_quadruped");
   const FunctionSpec spec = jacobianSpec(ModelFunction::Rnea);
-  FunctionBuilderOptions analytic_options, differentiate_options;
-  analytic_options.rnea_jacobian = RneaJacobianMethod::Analytic;
-  differentiate_options.rnea_jacobian = RneaJacobianMethod::Differentiate;
-  const BuiltFunction analytic = buildFunction(model, spec, analytic_options);
-  const BuiltFunction differentiated = buildFunction(model, spec, differentiate_options);
+  const auto [analytic, differentiated] = rneaJacobianBothWays(model);
   std::cout << "twin quadruped RNEA + J: analytic " << operations(analytic) << " operations, "
             << builtInstructions(analytic) << " instructions; differentiated " << operations(differentiated) << ", "
             << builtInstructions(differentiated) << "\n";
