@@ -284,10 +284,14 @@ class ChunkPrinter {
       return;
     }
     for (const ZeroRun& r : runs) {
-      std::uint32_t k = r.start;
+      // Four at a time from elements 4k of the block: into a 32-byte aligned output these
+      // stores are aligned, so none is split across two cache lines or two pages.
       const std::string o = "o" + std::to_string(block);
-      for (; k + 4 <= r.start + r.length; k += 4) out_ << "  RD_ZERO4(" << address(o, k, 4) << ");\n";
-      for (; k < r.start + r.length; ++k) out_ << "  " << element(o, k) << " = 0.0;\n";
+      const std::uint32_t end = r.start + r.length;
+      std::uint32_t k = r.start;
+      for (; k < end && (k % 4 != 0 || k + 4 > end); ++k) out_ << "  " << element(o, k) << " = 0.0;\n";
+      for (; k + 4 <= end; k += 4) out_ << "  RD_ZERO4(" << address(o, k, 4) << ");\n";
+      for (; k < end; ++k) out_ << "  " << element(o, k) << " = 0.0;\n";
     }
   }
 

@@ -48,26 +48,24 @@
     (z) = (r) * (r);                              \
   } while (0)
 
-/* sin r and cos r on |r| <= pi/4: coefficients (-1)^n / m! */
-#define RD_SC_POLY(r, z, sp, cp)                                                                           \
-  do {                                                                                                     \
-    (sp) = (r) + ((r) * (z)) *                                                                             \
-                     (-1.0 / 6.0 +                                                                         \
-                      (z) * (1.0 / 120.0 +                                                                 \
-                             (z) * (-1.0 / 5040.0 +                                                        \
-                                    (z) * (1.0 / 362880.0 +                                                \
-                                           (z) * (-1.0 / 39916800.0 +                                      \
-                                                  (z) * (1.0 / 6227020800.0 +                              \
-                                                         (z) * (-1.0 / 1307674368000.0 +                   \
-                                                                (z) * (1.0 / 355687428096000.0))))))));    \
-    (cp) = 1.0 - 0.5 * (z) +                                                                               \
-           ((z) * (z)) * (1.0 / 24.0 +                                                                     \
-                          (z) * (-1.0 / 720.0 +                                                            \
-                                 (z) * (1.0 / 40320.0 +                                                    \
-                                        (z) * (-1.0 / 3628800.0 +                                          \
-                                               (z) * (1.0 / 479001600.0 +                                  \
-                                                      (z) * (-1.0 / 87178291200.0 +                        \
-                                                             (z) * (1.0 / 20922789888000.0)))))));         \
+/* sin r and cos r on |r| <= pi/4: coefficients (-1)^n / m!, summed by Estrin's scheme
+   (pairs of terms, then with z^2, then with z^4) rather than Horner's: 4 dependent
+   operations instead of 8, and a chain's dynamics starts from these values. */
+#define RD_SC_POLY(T, r, z, sp, cp)                                                               \
+  do {                                                                                            \
+    const T rd_sc_z2 = (z) * (z), rd_sc_z4 = rd_sc_z2 * rd_sc_z2;                                 \
+    const T rd_sc_s01 = -1.0 / 6.0 + (z) * (1.0 / 120.0);                                         \
+    const T rd_sc_s23 = -1.0 / 5040.0 + (z) * (1.0 / 362880.0);                                   \
+    const T rd_sc_s45 = -1.0 / 39916800.0 + (z) * (1.0 / 6227020800.0);                           \
+    const T rd_sc_s67 = -1.0 / 1307674368000.0 + (z) * (1.0 / 355687428096000.0);                 \
+    const T rd_sc_s = (rd_sc_s01 + rd_sc_z2 * rd_sc_s23) + rd_sc_z4 * (rd_sc_s45 + rd_sc_z2 * rd_sc_s67); \
+    const T rd_sc_c01 = 1.0 / 24.0 + (z) * (-1.0 / 720.0);                                        \
+    const T rd_sc_c23 = 1.0 / 40320.0 + (z) * (-1.0 / 3628800.0);                                 \
+    const T rd_sc_c45 = 1.0 / 479001600.0 + (z) * (-1.0 / 87178291200.0);                         \
+    const T rd_sc_c = (rd_sc_c01 + rd_sc_z2 * rd_sc_c23) +                                        \
+                      rd_sc_z4 * (rd_sc_c45 + rd_sc_z2 * (1.0 / 20922789888000.0));               \
+    (sp) = (r) + ((r) * (z)) * rd_sc_s;                                                           \
+    (cp) = (1.0 - 0.5 * (z)) + rd_sc_z2 * rd_sc_c;                                                \
   } while (0)
 
 /* From the bits of t, sp, cp to those of sin x and cos x: an odd quadrant swaps them;
@@ -88,7 +86,7 @@
   do {                                                                                   \
     T rd_sc_t, rd_sc_r, rd_sc_z, rd_sc_sp, rd_sc_cp;                                     \
     RD_SC_REDUCE(T, x, rd_sc_t, rd_sc_r, rd_sc_z);                                       \
-    RD_SC_POLY(rd_sc_r, rd_sc_z, rd_sc_sp, rd_sc_cp);                                    \
+    RD_SC_POLY(T, rd_sc_r, rd_sc_z, rd_sc_sp, rd_sc_cp);                                    \
     U rd_sc_q = (U)rd_sc_t, rd_sc_si = (U)rd_sc_sp, rd_sc_ci = (U)rd_sc_cp;              \
     RD_SC_QUADRANT(U, rd_sc_q, rd_sc_si, rd_sc_ci);                                      \
     (s) = (T)rd_sc_si;                                                                   \
@@ -103,7 +101,7 @@ static inline void rd_sincos1(double x, double* s, double* c) {
   double t, r, z, sp, cp;
   uint64_t q, si, ci;
   RD_SC_REDUCE(double, x, t, r, z);
-  RD_SC_POLY(r, z, sp, cp);
+  RD_SC_POLY(double, r, z, sp, cp);
   memcpy(&q, &t, sizeof q);
   memcpy(&si, &sp, sizeof si);
   memcpy(&ci, &cp, sizeof ci);
