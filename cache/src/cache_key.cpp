@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/model/canonical.hpp"
 
 namespace robodiff::cache {
@@ -89,8 +90,10 @@ std::string targetCpuIdentity(bool native, const std::string& level) {
   std::sort(flags.begin(), flags.end());
   std::string joined;
   for (const std::string& w : flags) joined += (joined.empty() ? "" : " ") + w;
+  // The instruction cache's size decides which functions are addressed compactly.
   return arch + " native; vendor " + cpuinfoField(t, "vendor_id") + "; family " + cpuinfoField(t, "cpu family") +
-         "; model " + cpuinfoField(t, "model") + " (" + cpuinfoField(t, "model name") + "); flags " + joined;
+         "; model " + cpuinfoField(t, "model") + " (" + cpuinfoField(t, "model name") + "); l1i " +
+         std::to_string(codegen::hostInstructionCacheBytes()) + " bytes; flags " + joined;
 }
 
 std::string targetLabel(bool native, const std::string& level) {

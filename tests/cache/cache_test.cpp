@@ -17,6 +17,7 @@
 
 #include "robodiff/cache/cache.hpp"
 #include "robodiff/cache/cache_key.hpp"
+#include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/model/canonical.hpp"
 #include "support/process.hpp"
 #include "cache/cache_fixtures.hpp"
@@ -100,6 +101,9 @@ TEST(CacheKey, NativeTargetsNameTheCpuGenericOnesOnlyTheArchitecture) {
   const std::string native = targetCpuIdentity(true);
   EXPECT_NE(generic, native);
   EXPECT_NE(native.find("flags"), std::string::npos) << native;
+  // The instruction cache decides which functions are addressed compactly.
+  EXPECT_NE(native.find("l1i " + std::to_string(codegen::hostInstructionCacheBytes()) + " bytes"), std::string::npos)
+      << native;
   EXPECT_EQ(native, targetCpuIdentity(true));
   EXPECT_FALSE(isCacheKey("ABC"));
   EXPECT_FALSE(isCacheKey(std::string(64, 'g')));

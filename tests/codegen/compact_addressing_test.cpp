@@ -34,6 +34,13 @@ long offsetOf(const std::string& access) {
   return access[at] == '-' ? -std::labs(d) : d;
 }
 
+// The threshold is for a 32 KiB instruction cache; twice the cache, twice the code.
+TEST(CompactAddressing, TheThresholdScalesWithTheInstructionCache) {
+  EXPECT_EQ(compactAddressingFrom(32768), kCompactAddressingFrom);
+  EXPECT_EQ(compactAddressingFrom(65536), 2 * kCompactAddressingFrom);
+  EXPECT_EQ(compactAddressingFrom(0), kCompactAddressingFrom);  // unknown
+}
+
 TEST(CompactAddressing, ElementsPastAByteAreReachedThroughABaseWithinIt) {
   CompactAddressing a;
   for (int pass = 0; pass < 2; ++pass) {

@@ -1,5 +1,7 @@
 #include "robodiff/codegen/c_emitter.hpp"
 
+#include <unistd.h>
+
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -444,6 +446,16 @@ std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const Functio
   lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Emit : detail::LanePairMode::Off;
   const LoweredFunction lowered = detail::lower(graph, function, lo);
   return std::uint64_t{lowered.operations} - lowered.lane_pairs;
+}
+
+std::uint64_t compactAddressingFrom(std::uint64_t instruction_cache_bytes) {
+  if (instruction_cache_bytes == 0) return kCompactAddressingFrom;
+  return kCompactAddressingFrom * instruction_cache_bytes / kCompactAddressingCacheBytes;
+}
+
+std::uint64_t hostInstructionCacheBytes() {
+  const long bytes = sysconf(_SC_LEVEL1_ICACHE_SIZE);
+  return bytes > 0 ? static_cast<std::uint64_t>(bytes) : 0;
 }
 
 GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector<FunctionDefinition>& functions,

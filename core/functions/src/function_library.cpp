@@ -40,6 +40,12 @@ codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::
 
 codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base) {
   if (!build.batch) base.batch_width = 1;
+  // Code for this CPU (-march=native) fits this CPU's instruction cache: with 64 KiB,
+  // Panda's RNEA + J (5,700 instructions) ran 1.5% slower without compact addressing
+  // and its ABA + J 3% faster, and both compiled 9-15% sooner.
+  const bool this_cpu = build.march_native && build.target.empty();
+  if (this_cpu && base.compact_addressing_from == codegen::kCompactAddressingFrom)
+    base.compact_addressing_from = codegen::compactAddressingFrom(codegen::hostInstructionCacheBytes());
   return base;
 }
 

@@ -32,7 +32,14 @@ inline constexpr std::uint32_t kOutputOrderFrom = 60000;
 // less lane pairs) address their arrays and constants compactly (src/compact_addressing.hpp):
 // their code no longer fits the instruction cache and runs at the speed it streams in.
 // Below, it fits, and the base pointers only take registers (docs/code-generation.md).
+// This is for a 32 KiB instruction cache; compactAddressingFrom() scales it to another.
 inline constexpr std::uint64_t kCompactAddressingFrom = 4500;
+inline constexpr std::uint64_t kCompactAddressingCacheBytes = 32768;
+
+// The threshold for an instruction cache of `bytes` (0: unknown, the 32 KiB one's).
+std::uint64_t compactAddressingFrom(std::uint64_t instruction_cache_bytes);
+// The level-1 instruction cache of the CPU this runs on, in bytes; 0 if unknown.
+std::uint64_t hostInstructionCacheBytes();
 
 struct CodegenOptions {
   // Operations per translation unit before a function is cut into parts compiled
