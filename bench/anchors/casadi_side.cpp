@@ -30,6 +30,7 @@ namespace anchors {
 namespace {
 
 namespace fs = std::filesystem;
+using robodiff::cli::bench::AlignedDoubles;
 using robodiff::cli::bench::doNotOptimize;
 using robodiff::cli::bench::secondsPerCall;
 
@@ -115,8 +116,9 @@ struct CasadiLibrary {
   std::vector<double*> res;
   std::vector<long long> iw;
   std::vector<double> w;
-  Eigen::VectorXd q, dq, v, u, y;
-  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd q, dq, v, u;
+  AlignedDoubles y, jacobian;  // on 64-byte boundaries, as robodiff bench's buffers
+  Eigen::Index jacobian_rows = 0, jacobian_cols = 0;
 
   CasadiLibrary(const fs::path& path, const std::string& name) {
     handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -141,8 +143,10 @@ struct CasadiLibrary {
   void bind(const std::string& row, const pinocchio::Model& m, const State& s) {
     const bool with_jacobian = casadiRowHasJacobian(row);
     q = s.q, dq = Eigen::VectorXd::Zero(m.nv), v = s.v, u = casadiRowIsAba(row) ? s.tau : s.a;
-    y.resize(casadiOutputSize(row, m));
-    jacobian.resize(with_jacobian ? y.size() : 0, with_jacobian ? 3 * m.nv : 0);
+    y.assign(static_cast<size_t>(casadiOutputSize(row, m)), 0.0);
+    jacobian_rows = with_jacobian ? static_cast<Eigen::Index>(y.size()) : 0;
+    jacobian_cols = with_jacobian ? 3 * m.nv : 0;
+    jacobian.assign(static_cast<size_t>(jacobian_rows * jacobian_cols), 0.0);
     std::vector<const double*> inputs = {q.data(), v.data(), u.data()};
     if (with_jacobian) inputs.insert(inputs.begin() + 1, dq.data());
     if (arg.size() < inputs.size() || res.size() < (with_jacobian ? 2u : 1u))
@@ -155,6 +159,11 @@ struct CasadiLibrary {
     if (eval(arg.data(), res.data(), iw.data(), w.data(), 0) != 0) throw std::runtime_error("CasADi call failed");
     doNotOptimize(y[0]);
     doNotOptimize(jacobian);
+  }
+  // The outputs as Eigen objects (CasADi writes column-major, as Eigen stores them).
+  Output outputs() const {
+    return Output{Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size())),
+                  Eigen::Map<const Eigen::MatrixXd>(jacobian.data(), jacobian_rows, jacobian_cols), {}, {}, {}};
   }
 };
 
@@ -174,7 +183,7 @@ RowResult runCasadiRow(const std::string& row, const pinocchio::Model& model, co
   for (const State& s : checks) {
     lib.bind(row, model, s);
     lib.call();
-    r.outputs.push_back(Output{lib.y, lib.jacobian, {}, {}, {}});
+    r.outputs.push_back(lib.outputs());
   }
   lib.bind(row, model, timed);
   r.us = 1e6 * secondsPerCall([&] { lib.call(); }, plan);

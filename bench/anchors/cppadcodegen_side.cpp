@@ -38,6 +38,7 @@ namespace anchors {
 namespace {
 
 namespace fs = std::filesystem;
+using robodiff::cli::bench::AlignedDoubles;
 using robodiff::cli::bench::doNotOptimize;
 using robodiff::cli::bench::secondsPerCall;
 
@@ -168,13 +169,14 @@ fs::path libraryPath(const fs::path& dir, const std::string& row) { return dir /
 struct LoadedModel {
   std::unique_ptr<CppAD::cg::LinuxDynamicLib<double>> lib;
   std::unique_ptr<CppAD::cg::GenericModel<double>> model;
-  std::vector<double> x, y, jac;
+  AlignedDoubles x, y, jac;  // on 64-byte boundaries, as robodiff bench's buffers
   const size_t *rows = nullptr, *cols = nullptr;
 
+  void setInput(const std::vector<double>& values) { x.assign(values.begin(), values.end()); }
   void call(bool jacobian) {
-    model->ForwardZero(CppAD::cg::ArrayView<const double>(x), CppAD::cg::ArrayView<double>(y));
-    if (jacobian)
-      model->SparseJacobian(CppAD::cg::ArrayView<const double>(x), CppAD::cg::ArrayView<double>(jac), &rows, &cols);
+    const CppAD::cg::ArrayView<const double> in(x.data(), x.size());
+    model->ForwardZero(in, CppAD::cg::ArrayView<double>(y.data(), y.size()));
+    if (jacobian) model->SparseJacobian(in, CppAD::cg::ArrayView<double>(jac.data(), jac.size()), &rows, &cols);
     doNotOptimize(y[0]);
     doNotOptimize(jac);
   }
@@ -233,10 +235,10 @@ std::vector<RowResult> runCppADCodeGen(const pinocchio::Model& model, const Stat
     lm.y.resize(static_cast<size_t>(shape.n_out));
     lm.jac.resize(shape.jacobian ? static_cast<size_t>(3 * model.nv * shape.jacobian_rows) : 0);
     for (const State& s : checks) {
-      lm.x = inputAt(name, model, s);
+      lm.setInput(inputAt(name, model, s));
       r.outputs.push_back(outputOf(name, model, lm));
     }
-    lm.x = inputAt(name, model, timed);
+    lm.setInput(inputAt(name, model, timed));
     r.us = 1e6 * secondsPerCall([&] { lm.call(shape.jacobian); }, plan);
     rows.push_back(std::move(r));
   }

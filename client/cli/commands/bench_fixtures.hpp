@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.hpp"
 #include "output/bench_report.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/dynamics/all.hpp"
@@ -94,14 +95,15 @@ template <class Time> double medianOverCopies(const Generated& g, Time&& time) {
   return t[t.size() / 2];
 }
 
+
 // Input and output buffers of `knots` knots (knot-major per block, abi.h) and a work
-// buffer; inputs drawn with seeds kSeed + knot.
+// buffer, each on a 64-byte boundary; inputs drawn with seeds kSeed + knot.
 struct Buffers {
-  std::vector<std::vector<double>> in, out;
+  std::vector<AlignedDoubles> in, out;
   std::vector<std::uint32_t> in_size, out_size;
   std::vector<const double*> in_ptr;
   std::vector<double*> out_ptr;
-  std::vector<double> work;
+  AlignedDoubles work;
 
   Buffers(const Model& model, const Generated& g, std::uint64_t knots, std::size_t work_size);
   Eigen::VectorXd input(std::size_t block, std::uint64_t knot = 0) const;

@@ -1,7 +1,7 @@
 // Timing for `robodiff bench`: seconds per call as the median of a few batches of
 // calls (thread CPU time), each batch sized to a fixed length after a warm-up that also
-// calibrates the batch size; and the throughput of a batch split over threads (wall
-// clock).
+// calibrates the batch size; the throughput of a batch split over threads (wall clock);
+// and the aligned buffers the calls read and write.
 #pragma once
 
 #include <time.h>
@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <thread>
 #include <vector>
 
@@ -26,6 +27,20 @@ struct TimingPlan {
 // Keeps `value` (and everything reachable from memory) alive as far as the optimiser
 // knows: the call that produced it cannot be elided or hoisted out of a loop.
 template <class T> inline void doNotOptimize(const T& value) { asm volatile("" : : "g"(&value) : "memory"); }
+
+// Doubles on 64-byte boundaries, as Eigen allocates them where AVX-512 is enabled: a
+// caller's aligned output gets aligned vector stores (docs/code-generation.md).
+template <class T> struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlignment{64};
+  CacheLineAllocator() = default;
+  template <class U> CacheLineAllocator(const CacheLineAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlignment)); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlignment); }
+  template <class U> bool operator==(const CacheLineAllocator<U>&) const { return true; }
+  template <class U> bool operator!=(const CacheLineAllocator<U>&) const { return false; }
+};
+using AlignedDoubles = std::vector<double, CacheLineAllocator<double>>;
 
 inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
