@@ -79,16 +79,18 @@ namespace {
 // whether the task ran or the service dropped it.
 // Also hands the writer's next deferred request to the service (FairScheduler).
 struct InFlight {
-  InFlight(std::shared_ptr<DdsServer::Core> c, std::uint64_t writer) : core(std::move(c)), client(writer) {}
+  InFlight(std::shared_ptr<DdsServer::Core> c, const RequestInfo& info)
+      : core(std::move(c)), client(info.publication), answer(info.answer) {}
   InFlight(const InFlight&) = delete;
   InFlight& operator=(const InFlight&) = delete;
   ~InFlight() {
-    auto next = core->scheduler.finishPosted(client);
+    auto next = core->scheduler.finishPosted(client, answer && answer->answered());
     core->done();
     if (next) core->post(std::move(next->sample), std::move(next->info));
   }
   std::shared_ptr<DdsServer::Core> core;
   std::uint64_t client;
+  std::shared_ptr<dds_detail::AnswerOnce> answer;
 };
 
 }  // namespace
@@ -220,7 +222,12 @@ bool DdsServer::Core::drain(dds_entity_t reader) {
 // refused RESOURCE_EXHAUSTED (within its error budget).
 void DdsServer::Core::enqueue(std::shared_ptr<WireRequest> sample, RequestInfo info) {
   const std::uint64_t client = info.publication;
-  if (scheduler.push(client, Queued{sample, info})) return;
+  info.answer = std::make_shared<dds_detail::AnswerOnce>();
+  info.answer->release = [this, client] { scheduler.answered(client); };
+  if (scheduler.push(client, Queued{sample, info})) {
+    info.answer->armed = true;  // the queued copy shares it; served on this thread, later
+    return;
+  }
   const auto d = refused.note(client, info.received);
   const std::uint32_t quota = scheduler.limits().max_queued;
   if (d.log)
@@ -247,7 +254,7 @@ void DdsServer::Core::serve(Queued queued) {
     replies.sendError(queued.info,
                       {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
   }
-  scheduler.served(client);
+  scheduler.served(client, queued.info.answer && queued.info.answer->answered());
   done();
 }
 
@@ -338,7 +345,7 @@ void DdsServer::Core::evaluateInline(const RequestInfo& info, const robodiff_wir
 void DdsServer::Core::post(std::shared_ptr<WireRequest> sample, RequestInfo info) {
   // The task keeps the sample (its strings and doubles are read in place) and the shared
   // state; the token ends the request's in-flight count whether the task runs or is dropped.
-  auto token = std::make_shared<InFlight>(shared_from_this(), info.publication);
+  auto token = std::make_shared<InFlight>(shared_from_this(), info);
   ++waiting;
   const bool posted = service.post([core = shared_from_this(), sample, info, token] {
     --core->waiting;

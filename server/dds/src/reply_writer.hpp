@@ -9,6 +9,8 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <span>
 
 #include "reply_channels.hpp"
@@ -18,6 +20,18 @@
 
 namespace robodiff::server::dds_detail {
 
+// Once a queued request's reply is about to be written: it stops counting against its
+// writer's quota (FairScheduler::answered) before the client can send its next one.
+// Armed only once the request is queued; does nothing for a refused one.
+struct AnswerOnce {
+  std::function<void()> release;
+  std::atomic<bool> armed{false}, done{false};
+  void operator()() {
+    if (armed.load() && !done.exchange(true)) release();
+  }
+  bool answered() const { return done.load(); }
+};
+
 // What a reply needs to know about its request.
 struct RequestInfo {
   rpc::RequestHeader header;
@@ -26,6 +40,7 @@ struct RequestInfo {
   std::uint32_t knot_count = 0;  // EvaluateBatch: the request's (total_knots of an error reply)
   dds_instance_handle_t publication = 0;  // the writer that sent it (its partition names the caller)
   ReplyChannelPtr channel;                // the reply writer in that partition
+  std::shared_ptr<AnswerOnce> answer;     // called before the first reply is written
 };
 
 class ReplyWriter {

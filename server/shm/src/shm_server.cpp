@@ -60,6 +60,8 @@ struct TakenRequest {
   shm::RequestView view;
   std::vector<std::byte> body;
   Clock::time_point received;
+  bool admitted = false;                  // queued: counts against its client's quota
+  mutable std::atomic<bool> answered{false};  // its reply is out: it no longer counts
 };
 using Taken = std::shared_ptr<TakenRequest>;
 using shm_detail::ShmSession;
@@ -151,7 +153,14 @@ struct ShmServer::Impl {
       log.debug("shm_reply_dropped", {{"method", rpc::toString(method)}, {"client_id", request.client_id}});
     return status;
   }
+  // A queued request's reply is about to be sent: it stops counting against its client's
+  // quota first, so a client waiting for each reply before the next is never refused.
+  void answer(const TakenRequest& r) {
+    if (r.admitted && !r.answered.exchange(true)) scheduler.answered(r.session->key);
+  }
+
   Status sendReply(const TakenRequest& r, Status status, std::span<const std::byte> body = {}) {
+    answer(r);
     return sendReply(*r.session, r.routing, r.view.header, r.view.method, std::move(status), body);
   }
 
@@ -332,8 +341,12 @@ struct ShmServer::Impl {
     taken->view.body = taken->body;
     taken->received = received;
     release(*session, payload);
-    if (scheduler.push(client, taken)) begin();  // in flight until answered (waitIdle)
-    else overQuota(client, *taken);
+    if (scheduler.push(client, taken)) {
+      taken->admitted = true;  // served on this thread, later
+      begin();                 // in flight until answered (waitIdle)
+    } else {
+      overQuota(client, *taken);
+    }
   }
 
   void refuse(ShmSession& session, const void* payload, const iox::popo::RequestHeader& routing,
@@ -365,7 +378,7 @@ struct ShmServer::Impl {
   void serve(std::uint64_t client, Taken taken) {
     if (taken->view.method != rpc::Method::Evaluate) return post(client, std::move(taken));
     const Status s = evaluate(*taken);
-    scheduler.served(client);
+    scheduler.served(client, taken->answered);
     record(taken->view.method, s.code, taken->received);
     end();
   }
@@ -427,6 +440,7 @@ struct ShmServer::Impl {
       }
       return fail(s);
     }
+    answer(r);
     std::lock_guard lock(session.mutex);
     if (!session.port || session.port->send(chunk).has_error())
       log.debug("shm_reply_dropped", {{"method", rpc::toString(view.method)}, {"client_id", view.header.client_id}});
@@ -445,19 +459,19 @@ struct ShmServer::Impl {
     const bool queued = service.post([this, client, taken] {
       const Status sent = runPosted(*taken);
       record(taken->view.method, sent.code, taken->received);
-      finished(client);
+      finished(client, *taken);
     });
     if (queued) return;
     Status busy{StatusCode::ResourceExhausted, std::string("the server's request queue is full; ") +
                                                    rpc::toString(taken->view.method) + " refused, retry later"};
     sendReply(*taken, busy);
     record(taken->view.method, busy.code, taken->received);
-    finished(client);
+    finished(client, *taken);
   }
 
   // One of the client's posted requests was answered: hand over its next, if any.
-  void finished(std::uint64_t client) {
-    std::optional<Taken> next = scheduler.finishPosted(client);
+  void finished(std::uint64_t client, const TakenRequest& r) {
+    std::optional<Taken> next = scheduler.finishPosted(client, r.answered);
     end();
     if (next) hand(client, std::move(*next));
   }
@@ -553,7 +567,7 @@ void ShmServer::stop() {
   // Requests still in the lanes are not answered (their clients time out, as for those
   // still in iceoryx's queue); they no longer count as in flight.
   while (auto next = d.scheduler.next()) {
-    d.scheduler.served(next->client);
+    d.scheduler.served(next->client, next->item->answered);
     d.end();
   }
   {

@@ -12,8 +12,12 @@
 // order, and the next one is handed over when one finishes. So a client sending many
 // expensive requests never fills the service's shared queue.
 //
+// A request stops being pending when its reply is about to be sent (answered()), not when
+// its task ends: a client that waits for each reply before sending the next is never
+// refused, however late the server's thread gets to the end of the task.
+//
 // Threading: push(), next() and served() on the receive thread only; startPosted() on
-// the receive thread; finishPosted() on any thread (a request thread, when done).
+// the receive thread; answered() and finishPosted() on any thread (a request thread).
 // The per-client ledger is guarded by a mutex, the lanes are the receive thread's own.
 
 #include <cstddef>
@@ -95,10 +99,17 @@ class FairScheduler {
   std::size_t waitingClients() const { return rotation_.size(); }
   std::size_t queued() const { return queued_; }
 
-  // A request next() returned was answered on the receive thread (or refused).
-  void served(Key client) {
+  // A request's reply is about to be sent: it no longer counts as pending. Once per
+  // request; served() and finishPosted() are told whether it happened.
+  void answered(Key client) {
     std::lock_guard lock(mutex_);
-    release(client);
+    release(client, true);
+  }
+
+  // A request next() returned was done with on the receive thread (answered or not).
+  void served(Key client, bool was_answered) {
+    std::lock_guard lock(mutex_);
+    release(client, !was_answered);
   }
 
   // A posted request next() returned: true when it may be handed to the service now
@@ -114,13 +125,13 @@ class FairScheduler {
     l.deferred.push_back(std::move(item));
     return false;
   }
-  // A posted request of `client` finished (answered or refused): the client's next
-  // deferred request, which then counts as running, to be handed to the service.
-  std::optional<Item> finishPosted(Key client) {
+  // A posted request of `client` finished (answered, or dropped unanswered): the
+  // client's next deferred request, which then counts as running, to be handed over.
+  std::optional<Item> finishPosted(Key client, bool was_answered) {
     std::lock_guard lock(mutex_);
     Ledger& l = ledger_[client];
     if (l.running > 0) --l.running;
-    release(client);
+    release(client, !was_answered);
     const auto it = ledger_.find(client);
     if (it == ledger_.end() || it->second.deferred.empty()) return std::nullopt;
     Item item = std::move(it->second.deferred.front());
@@ -142,11 +153,12 @@ class FairScheduler {
     std::deque<Item> deferred;  // posted, waiting for one of the client's running ones
   };
 
-  // With mutex_ held: one pending request less; the entry goes when the client has none.
-  void release(Key client) {
+  // With mutex_ held: one pending request less (if `one_less`); the entry goes when the
+  // client has none.
+  void release(Key client, bool one_less) {
     const auto it = ledger_.find(client);
     if (it == ledger_.end()) return;
-    if (it->second.pending > 0) --it->second.pending;
+    if (one_less && it->second.pending > 0) --it->second.pending;
     if (it->second.pending == 0 && it->second.running == 0 && it->second.deferred.empty() &&
         ledger_.size() > kKeptIdleLanes)
       ledger_.erase(it);
