@@ -30,10 +30,14 @@ def test_rows_and_tolerances_are_those_of_the_cli(arm7):
     cli = json.loads(done.stdout)
     result = robodiff.check(arm7, json.loads((SPECS / "crba.json").read_text()), samples=2)
     assert result.function == cli["function"] and result.passed == cli["pass"]
-    assert [(c.output, c.against, c.tolerance, c.seed) for c in result.comparisons] == \
-        [(r["output"], r["against"], r["tolerance"], r["seed"]) for r in cli["comparisons"]]
-    for ours, theirs in zip(result.comparisons, cli["comparisons"]):  # same states: the same reference
+    assert [(c.output, c.against, c.tolerance) for c in result.comparisons] == \
+        [(r["output"], r["against"], r["tolerance"]) for r in cli["comparisons"]]
+    # Same states, so errors of the same size; not where the worst one falls: at 1e-15 that
+    # depends on the last bits of the reference, which the CLI and this module (each built
+    # with -march=native, inlined differently) may round apart.
+    for ours, theirs in zip(result.comparisons, cli["comparisons"]):
         assert ours.worst_rel_error <= max(10 * theirs["worst_rel_error"], 1e-14)
+        assert ours.seed in (1, 2) and theirs["seed"] in (1, 2)
 
 
 def test_a_function_that_computes_something_else_fails(arm7, crba):
