@@ -80,17 +80,17 @@ namespace {
 // Also hands the writer's next deferred request to the service (FairScheduler).
 struct InFlight {
   InFlight(std::shared_ptr<DdsServer::Core> c, const RequestInfo& info)
-      : core(std::move(c)), client(info.publication), answer(info.answer) {}
+      : core(std::move(c)), client(info.publication), quota(info.quota) {}
   InFlight(const InFlight&) = delete;
   InFlight& operator=(const InFlight&) = delete;
   ~InFlight() {
-    auto next = core->scheduler.finishPosted(client, answer && answer->answered());
+    auto next = core->scheduler.finishPosted(client, quota->slot);
     core->done();
     if (next) core->post(std::move(next->sample), std::move(next->info));
   }
   std::shared_ptr<DdsServer::Core> core;
   std::uint64_t client;
-  std::shared_ptr<dds_detail::AnswerOnce> answer;
+  std::shared_ptr<dds_detail::QuotaRelease> quota;  // a posted request was queued: always set
 };
 
 }  // namespace
@@ -222,10 +222,10 @@ bool DdsServer::Core::drain(dds_entity_t reader) {
 // refused RESOURCE_EXHAUSTED (within its error budget).
 void DdsServer::Core::enqueue(std::shared_ptr<WireRequest> sample, RequestInfo info) {
   const std::uint64_t client = info.publication;
-  info.answer = std::make_shared<dds_detail::AnswerOnce>();
-  info.answer->release = [this, client] { scheduler.answered(client); };
+  info.quota = std::make_shared<dds_detail::QuotaRelease>();
+  info.quota->release = [this, client](QuotaSlot& slot) { scheduler.answered(client, slot); };
   if (scheduler.push(client, Queued{sample, info})) {
-    info.answer->armed = true;  // the queued copy shares it; served on this thread, later
+    info.quota->slot.admit();  // the queued copy shares it; served on this thread, later
     return;
   }
   const auto d = refused.note(client, info.received);
@@ -254,7 +254,7 @@ void DdsServer::Core::serve(Queued queued) {
     replies.sendError(queued.info,
                       {StatusCode::Internal, std::string("robodiffd failed to handle the request: ") + e.what()});
   }
-  scheduler.served(client, queued.info.answer && queued.info.answer->answered());
+  scheduler.served(client, queued.info.quota->slot);
   done();
 }
 

@@ -16,7 +16,7 @@ void ReplyWriter::header(const RequestInfo& info, const Status& status, robodiff
 }
 
 bool ReplyWriter::write(const RequestInfo& info, const robodiff_wire_Reply& reply) {
-  if (info.answer) (*info.answer)();
+  if (info.quota) info.quota->release(info.quota->slot);
   if (!open_.load() || !info.channel) return false;  // stopped: the client sees the server gone instead
   const dds_return_t rc = dds_write(info.channel->writer, &reply);
   if (rc == DDS_RETCODE_OK) return true;

@@ -15,21 +15,18 @@
 
 #include "reply_channels.hpp"
 #include "robodiff/schema/dds_codec.hpp"
+#include "robodiff/server/fair_scheduler.hpp"
 #include "robodiff/server/log.hpp"
 #include "robodiff/server/service_api.hpp"
 
 namespace robodiff::server::dds_detail {
 
-// Once a queued request's reply is about to be written: it stops counting against its
-// writer's quota (FairScheduler::answered) before the client can send its next one.
-// Armed only once the request is queued; does nothing for a refused one.
-struct AnswerOnce {
-  std::function<void()> release;
-  std::atomic<bool> armed{false}, done{false};
-  void operator()() {
-    if (armed.load() && !done.exchange(true)) release();
-  }
-  bool answered() const { return done.load(); }
+// A queued request's place in its writer's quota (fair_scheduler.hpp), given back by
+// `release` (FairScheduler::answered) when its first reply is about to be written, before
+// the client can send its next request. A refused request's slot was never admitted.
+struct QuotaRelease {
+  QuotaSlot slot;
+  std::function<void(QuotaSlot&)> release;
 };
 
 // What a reply needs to know about its request.
@@ -40,7 +37,7 @@ struct RequestInfo {
   std::uint32_t knot_count = 0;  // EvaluateBatch: the request's (total_knots of an error reply)
   dds_instance_handle_t publication = 0;  // the writer that sent it (its partition names the caller)
   ReplyChannelPtr channel;                // the reply writer in that partition
-  std::shared_ptr<AnswerOnce> answer;     // called before the first reply is written
+  std::shared_ptr<QuotaRelease> quota;    // released before a reply is written
 };
 
 class ReplyWriter {

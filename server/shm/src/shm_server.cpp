@@ -60,8 +60,7 @@ struct TakenRequest {
   shm::RequestView view;
   std::vector<std::byte> body;
   Clock::time_point received;
-  bool admitted = false;                  // queued: counts against its client's quota
-  mutable std::atomic<bool> answered{false};  // its reply is out: it no longer counts
+  mutable QuotaSlot quota;  // its place in its client's quota (fair_scheduler.hpp)
 };
 using Taken = std::shared_ptr<TakenRequest>;
 using shm_detail::ShmSession;
@@ -155,9 +154,7 @@ struct ShmServer::Impl {
   }
   // A queued request's reply is about to be sent: it stops counting against its client's
   // quota first, so a client waiting for each reply before the next is never refused.
-  void answer(const TakenRequest& r) {
-    if (r.admitted && !r.answered.exchange(true)) scheduler.answered(r.session->key);
-  }
+  void answer(const TakenRequest& r) { scheduler.answered(r.session->key, r.quota); }
 
   Status sendReply(const TakenRequest& r, Status status, std::span<const std::byte> body = {}) {
     answer(r);
@@ -342,7 +339,7 @@ struct ShmServer::Impl {
     taken->received = received;
     release(*session, payload);
     if (scheduler.push(client, taken)) {
-      taken->admitted = true;  // served on this thread, later
+      taken->quota.admit();  // served on this thread, later
       begin();                 // in flight until answered (waitIdle)
     } else {
       overQuota(client, *taken);
@@ -378,7 +375,7 @@ struct ShmServer::Impl {
   void serve(std::uint64_t client, Taken taken) {
     if (taken->view.method != rpc::Method::Evaluate) return post(client, std::move(taken));
     const Status s = evaluate(*taken);
-    scheduler.served(client, taken->answered);
+    scheduler.served(client, taken->quota);
     record(taken->view.method, s.code, taken->received);
     end();
   }
@@ -471,7 +468,7 @@ struct ShmServer::Impl {
 
   // One of the client's posted requests was answered: hand over its next, if any.
   void finished(std::uint64_t client, const TakenRequest& r) {
-    std::optional<Taken> next = scheduler.finishPosted(client, r.answered);
+    std::optional<Taken> next = scheduler.finishPosted(client, r.quota);
     end();
     if (next) hand(client, std::move(*next));
   }
@@ -567,7 +564,7 @@ void ShmServer::stop() {
   // Requests still in the lanes are not answered (their clients time out, as for those
   // still in iceoryx's queue); they no longer count as in flight.
   while (auto next = d.scheduler.next()) {
-    d.scheduler.served(next->client, next->item->answered);
+    d.scheduler.served(next->client, next->item->quota);
     d.end();
   }
   {

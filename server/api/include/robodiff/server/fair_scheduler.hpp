@@ -20,6 +20,7 @@
 // the receive thread; answered() and finishPosted() on any thread (a request thread).
 // The per-client ledger is guarded by a mutex, the lanes are the receive thread's own.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -29,6 +30,21 @@
 #include <utility>
 
 namespace robodiff::server {
+
+// A queued request's place in its client's quota: taken when the transport admits it
+// (admit(), after push() returned true), given back once, by answered() when its reply
+// goes out, or by served() / finishPosted() when it never went out (dropped at stop, a
+// closed session).
+class QuotaSlot {
+ public:
+  void admit() { admitted_.store(true); }
+  bool answered() const { return answered_.load(); }
+  // True once, for an admitted request: the caller gives its place back.
+  bool answer() { return admitted_.load() && !answered_.exchange(true); }
+
+ private:
+  std::atomic<bool> admitted_{false}, answered_{false};
+};
 
 struct FairLimits {
   std::uint32_t max_queued = 64;   // requests pending per client; more: RESOURCE_EXHAUSTED
@@ -99,17 +115,18 @@ class FairScheduler {
   std::size_t waitingClients() const { return rotation_.size(); }
   std::size_t queued() const { return queued_; }
 
-  // A request's reply is about to be sent: it no longer counts as pending. Once per
-  // request; served() and finishPosted() are told whether it happened.
-  void answered(Key client) {
+  // A request's reply is about to be sent: it no longer counts as pending (once per
+  // request, however many replies or chunks it sends).
+  void answered(Key client, QuotaSlot& slot) {
+    if (!slot.answer()) return;
     std::lock_guard lock(mutex_);
     release(client, true);
   }
 
   // A request next() returned was done with on the receive thread (answered or not).
-  void served(Key client, bool was_answered) {
+  void served(Key client, const QuotaSlot& slot) {
     std::lock_guard lock(mutex_);
-    release(client, !was_answered);
+    release(client, !slot.answered());
   }
 
   // A posted request next() returned: true when it may be handed to the service now
@@ -127,11 +144,11 @@ class FairScheduler {
   }
   // A posted request of `client` finished (answered, or dropped unanswered): the
   // client's next deferred request, which then counts as running, to be handed over.
-  std::optional<Item> finishPosted(Key client, bool was_answered) {
+  std::optional<Item> finishPosted(Key client, const QuotaSlot& slot) {
     std::lock_guard lock(mutex_);
     Ledger& l = ledger_[client];
     if (l.running > 0) --l.running;
-    release(client, !was_answered);
+    release(client, !slot.answered());
     const auto it = ledger_.find(client);
     if (it == ledger_.end() || it->second.deferred.empty()) return std::nullopt;
     Item item = std::move(it->second.deferred.front());
