@@ -185,8 +185,9 @@ TEST(LanePairs, TwinsInDifferentColumnsArePairedWhenSeededAtTwinsOnly) {
 }
 
 // Sin and cos of three joint angles (inputs): the first two run in one kernel call in
-// two lanes, the third alone; every value as libm computes it (within 2 ulp), also where
-// one lane is beyond the kernel's range (libm lane by lane).
+// two lanes, the third alone (kernels without checks of their own: the function checks
+// the angles at entry); every value as libm computes it (within 2 ulp), also where one
+// angle is beyond the kernel's range.
 TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
   Graph g;
   std::vector<NodeId> values;
@@ -199,10 +200,10 @@ TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
   TempDir dir;
   const PairedBuild built = buildLimbs(g, f, dir, "angles", {});
   const std::string source = sourcesOf(built.generated);
-  const std::size_t first = source.find("rd_sincos_pair(p");
-  ASSERT_NE(first, std::string::npos);
-  EXPECT_EQ(source.find("rd_sincos_pair(p", first + 1), std::string::npos) << "one call for two angles";
-  EXPECT_NE(source.find("rd_sincos1("), std::string::npos) << "the third angle alone";
+  const std::size_t first = source.find("rd_sincos_pair_in_range(p");
+  ASSERT_NE(first, std::string::npos) << source;
+  EXPECT_EQ(source.find("rd_sincos_pair_in_range(p", first + 1), std::string::npos) << "one call for two angles";
+  EXPECT_NE(source.find("rd_sincos1_in_range("), std::string::npos) << "the third angle alone";
   const CompiledFunction& fn = built.library.function("angles");
   using Angles = std::array<double, 3>;
   for (const Angles& q : {Angles{0.3, -2.5, 7.0}, Angles{1e6, 0.5, -1e7}, Angles{-0.0, 1e-300, 3.0}}) {
@@ -219,7 +220,7 @@ TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
 
 // Seven angles: four in the lanes of one 256-bit kernel call, two in a pair, the last
 // alone; the same bits as the build without lane pairs (the scalar kernel), with angles
-// beyond the kernel's range among them (libm, lane by lane).
+// beyond the kernel's range among them (libm for them).
 TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
   constexpr std::uint32_t kAngles = 7;
   Graph g;
@@ -241,9 +242,9 @@ TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
     for (std::size_t at = source.find(call); at != std::string::npos; at = source.find(call, at + 1)) ++n;
     return n;
   };
-  EXPECT_EQ(calls("  rd_sincos_quad(p"), 1u) << source;
-  EXPECT_EQ(calls("  rd_sincos_pair(p"), 1u) << source;
-  EXPECT_EQ(calls("  rd_sincos1("), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos_quad_in_range(p"), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos_pair_in_range(p"), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos1_in_range("), 1u) << source;
   CodegenOptions off;
   off.lane_pairs = false;
   const PairedBuild plain = buildLimbs(g, f, dir, "plain", off);

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "robodiff/codegen/function_definition.hpp"
 
@@ -18,6 +20,12 @@ std::string cString(const std::string& s);
 // `prefix`_eval_batch: n knots, RD_W at a time through `prefix`_chunk where the target
 // has vector types, the rest (or everything) through `prefix`_eval.
 std::string batchEntry(const FunctionDefinition& f, const std::string& prefix, std::uint32_t transfer);
+
+// `prefix`_eval of a function whose sin-cos kernels all take inputs: the arguments'
+// range checked once, then `prefix`_in_range (kernels without checks) or, with one
+// beyond the kernels' range, `prefix`_exact (libm for it). `angles`: (block, index).
+std::string rangeCheckedEntry(const std::string& prefix,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles);
 
 // The function's input and output descriptors (and a sparse block's CSR pattern).
 std::string descriptorTables(const FunctionDefinition& f, const std::string& prefix);

@@ -47,6 +47,7 @@ class Lowerer {
     out.sincos_pairs = sincos_pairs_;
     out.lane_pairs = static_cast<std::uint32_t>(pairs_.count());
     out.sincos_lane_pairs = sincos_lane_pairs_;
+    out.sincos_inputs = sincosInputs();
     return out;
   }
 
@@ -64,6 +65,22 @@ class Lowerer {
       case Op::Exp: case Op::Log: case Op::Tanh: return true;
       default: return false;
     }
+  }
+
+  // The input elements whose sin and cos the kernels compute; empty where any kernel's
+  // argument is not an input (nor a constant in the kernel's range).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> sincosInputs() const {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> elements;
+    for (const Step& s : steps_) {
+      if (s.second == kNone) continue;
+      const Ref x = resolve(g_, g_.node(s.first).args[0]);
+      if (x.is_constant && std::fabs(x.value) <= kSinCosKernelLimit) continue;
+      if (x.is_constant || g_.node(x.base).op != Op::Input) return {};
+      elements.push_back(input_where_[g_.node(x.base).index]);
+    }
+    std::sort(elements.begin(), elements.end());
+    elements.erase(std::unique(elements.begin(), elements.end()), elements.end());
+    return elements;
   }
 
   void markNeeded() {

@@ -89,7 +89,13 @@ struct LoweredFunction {
   std::uint32_t sincos_pairs = 0;
   std::uint32_t lane_pairs = 0;     // ComputePair instructions
   std::uint32_t sincos_lane_pairs = 0;  // SinCosPair and SinCosQuad instructions
+  // (block, index) of the inputs the sin-cos kernels take, in order, when every kernel's
+  // argument is an input; empty otherwise (or without kernels).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> sincos_inputs;
 };
+
+// sincos_kernel.h's range: |x| <= 2^19 (RD_SC_LIMIT).
+inline constexpr double kSinCosKernelLimit = 524288.0;
 
 // Lane pairs (lane_pairs.hpp): Off; Order: the pairs' order without pairs (the code
 // both flavours of a C library share parts and work buffer with); Emit: the pairs too.

@@ -93,11 +93,9 @@
     (c) = (T)rd_sc_ci;                                                                   \
   } while (0)
 
-static inline void rd_sincos1(double x, double* s, double* c) {
-  if (!(fabs(x) <= RD_SC_LIMIT)) {
-    sincos(x, s, c);
-    return;
-  }
+/* The kernel on one argument with |x| <= 2^19 (not checked): generated code whose
+   every argument is checked at its entry (docs/code-generation.md). */
+static inline void rd_sincos1_in_range(double x, double* s, double* c) {
   double t, r, z, sp, cp;
   uint64_t q, si, ci;
   RD_SC_REDUCE(double, x, t, r, z);
@@ -108,6 +106,14 @@ static inline void rd_sincos1(double x, double* s, double* c) {
   RD_SC_QUADRANT(uint64_t, q, si, ci);
   memcpy(s, &si, sizeof si);
   memcpy(c, &ci, sizeof ci);
+}
+
+static inline void rd_sincos1(double x, double* s, double* c) {
+  if (!(fabs(x) <= RD_SC_LIMIT)) {
+    sincos(x, s, c);
+    return;
+  }
+  rd_sincos1_in_range(x, s, c);
 }
 
 #endif
