@@ -137,11 +137,15 @@ TEST_P(SpecCases, ComputeBackendsAgree) {
   EXPECT_EQ(value.cols(), 1);
   EXPECT_EQ(jacobian.rows(), c.robot.nv);
   EXPECT_EQ(jacobian.cols(), 3 * c.robot.nv);
+  // ABA solves with the mass matrix: the generated sums and the double reference's round
+  // apart by up to 1.5e-12 relative on entries under 1 (the quadruped, twelve random
+  // states, in either order of the sums' terms).
+  const double value_tolerance = c.spec == "aba_jacobian" ? 5e-12 : 1e-12;
   for (const std::string backend : {"generated", "interpreted"}) {
     SCOPED_TRACE(backend);
     const json j = jsonOf(cli(base + backend));
     EXPECT_EQ(j["backend"], backend);
-    EXPECT_TRUE(matricesAgree(matrixOf(j["value"]), value, 1e-12));
+    EXPECT_TRUE(matricesAgree(matrixOf(j["value"]), value, value_tolerance));
     EXPECT_TRUE(matricesAgree(matrixOf(j["jacobian"]), jacobian, 1e-9));
   }
 }

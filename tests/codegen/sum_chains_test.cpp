@@ -80,6 +80,44 @@ TEST(SumChains, ASumOnTheCriticalPathStaysATree) {
   EXPECT_EQ(countOf(eval, "vfmadd"), 2u) << eval;
 }
 
+// y = ((L1 x0 - L2 x1) + x2 x3) + 0.5 with L1 and L2 at the end of a row of divisions:
+// the terms ready first are summed first, 0.5 + x2 x3 in one multiply-add while the
+// divisions run, and each late product joins in a multiply-add of its own. In the
+// tree's order the late products were subtracted first and the constant added last.
+TEST(SumChains, LateTermsJoinTheChainLast) {
+  if (!cpuHasFlag("fma")) GTEST_SKIP() << "this CPU has no FMA: nothing to fuse";
+  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
+  Graph g;
+  NodeId x[7];
+  for (std::uint32_t i = 0; i < 7; ++i) x[i] = g.input(i);
+  auto late = [&](NodeId a) {
+    for (int k = 0; k < 4; ++k) a = g.binary(Op::Div, a, x[5]);
+    return a;
+  };
+  const NodeId l1 = g.binary(Op::Mul, late(x[4]), x[0]), l2 = g.binary(Op::Mul, late(x[6]), x[1]);
+  const NodeId y = g.binary(Op::Add, g.binary(Op::Add, g.binary(Op::Sub, l1, l2), g.binary(Op::Mul, x[2], x[3])),
+                            g.constant(0.5));
+  const FunctionDefinition f{"sums", {{"x", 7}}, {OutputBlock::dense("y", 1, 1, {y})}};
+  TempDir dir;
+  const std::string eval = disassembly(compiledWithGcc(generateLibrary(g, {f}), dir / "late.so"), "rd_sums_eval");
+  ASSERT_FALSE(eval.empty());
+  EXPECT_EQ(countOf(eval, "vaddsd"), 0u) << eval;
+  EXPECT_EQ(countOf(eval, "vmulsd"), 0u) << eval;
+  EXPECT_EQ(countOf(eval, "vfmadd") + countOf(eval, "vfnmadd") + countOf(eval, "vfmsub") + countOf(eval, "vfnmsub"),
+            3u)
+      << eval;
+  const LoadedLibrary library = LoadedLibrary::open(dir / "late.so");
+  std::vector<double> work(library.function("sums").workSize() + 1);
+  for (std::uint32_t seed = 1; seed <= 10; ++seed) {
+    auto in = randomInputs(f, 1, seed);
+    in[0][5] = 1.5 + in[0][5] * 0.25;  // divisions by 1.25 to 1.75
+    const auto expected = reference(g, f, in, 0);
+    auto out = outputBuffers(f, 1);
+    library.function("sums").evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
+    EXPECT_NEAR(out[0][0], expected[0][0], 1e-14) << seed;
+  }
+}
+
 TEST(SumChains, ChainsKeepTheValuesAndTheOperationCount) {
   Graph g;
   const FunctionDefinition f = sumTrees(g);

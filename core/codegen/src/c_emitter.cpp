@@ -416,6 +416,7 @@ Lowerings lowerForC(const symbolic::Graph& graph, const FunctionDefinition& f, c
   lo.split_threshold = options.split_threshold;
   lo.reuse_slots = options.reuse_temporaries;
   lo.output_order_from = options.output_order_from;
+  lo.ready_first_sums = detail::readyFirstSums(graph, f);
   Lowerings l;
   auto lowerBoth = [&] {
     lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Order : detail::LanePairMode::Off;
@@ -458,6 +459,7 @@ std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const Functio
   lo.split_threshold = options.split_threshold;
   lo.output_order_from = options.output_order_from;
   lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Emit : detail::LanePairMode::Off;
+  lo.ready_first_sums = detail::readyFirstSums(graph, function);
   const LoweredFunction lowered = detail::lower(graph, function, lo);
   return std::uint64_t{lowered.operations} - lowered.lane_pairs;
 }

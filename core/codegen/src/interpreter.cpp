@@ -182,7 +182,9 @@ Interpreter::Interpreter(const symbolic::Graph& graph, FunctionDefinition functi
   function_.validate(graph);
   for (const auto& b : function_.inputs) input_sizes_.push_back(b.size);
   for (const auto& b : function_.outputs) output_sizes_.push_back(b.size());
-  const detail::LoweredFunction lowered = detail::lower(graph, function_);
+  detail::LoweringOptions options;
+  options.ready_first_sums = detail::readyFirstSums(graph, function_);
+  const detail::LoweredFunction lowered = detail::lower(graph, function_, options);
   const detail::Chunk& chunk = lowered.chunks.at(0);
   std::vector<Instruction> code;
   std::vector<double> constants;

@@ -618,8 +618,14 @@ class Lowerer {
 
 LoweredFunction lower(const Graph& graph, const FunctionDefinition& function, const LoweringOptions& options) {
   if (!options.chain_sums) return Lowerer(graph, function, options).run();
-  const ChainedFunction chained = chainSums(graph, function);
+  const ChainedFunction chained = chainSums(graph, function, options.ready_first_sums);
   return Lowerer(chained.graph, chained.function, options).run();
+}
+
+bool readyFirstSums(const Graph& graph, const FunctionDefinition& function) {
+  LoweringOptions paired;
+  paired.lane_pairs = LanePairMode::Emit;
+  return lower(graph, function, paired).lane_pairs == 0;
 }
 
 }  // namespace robodiff::codegen::detail

@@ -120,10 +120,17 @@ struct LoweringOptions {
   // instead of in the trace's order; 0: never.
   std::uint32_t output_order_from = kOutputOrderFrom;
   LanePairMode lane_pairs = LanePairMode::Off;
+  bool ready_first_sums = false;  // sum chains take their terms in order of readiness (sum_chains.hpp)
 };
 
 // Expects a definition that passed validate(graph).
 LoweredFunction lower(const symbolic::Graph& graph, const FunctionDefinition& function,
                       const LoweringOptions& options = {});
+
+// Whether the function's sum chains take their terms in order of readiness: where its
+// code has no lane pairs (a serial robot's). Reordered chains cost a twin-limbed robot's
+// functions a share of their lane pairs (the free-flying Talos's RNEA + J all of them).
+// The C code and the interpreter both ask, so they compute the same chains.
+bool readyFirstSums(const symbolic::Graph& graph, const FunctionDefinition& function);
 
 }  // namespace robodiff::codegen::detail

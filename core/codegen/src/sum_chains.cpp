@@ -32,7 +32,7 @@ std::uint32_t latency(Op op) {
 
 class SumChainer {
  public:
-  SumChainer(const Graph& g, const FunctionDefinition& f) : g_(g), f_(f) {}
+  SumChainer(const Graph& g, const FunctionDefinition& f, bool ready_first) : g_(g), f_(f), ready_first_(ready_first) {}
 
   ChainedFunction run() {
     countUses();
@@ -116,7 +116,8 @@ class SumChainer {
     for (NodeId root = 0; root < g_.size(); ++root) {
       if (!needed_[root] || !isSum(g_.node(root).op) || interior(root)) continue;
       walkTree(root, tree, interiors);
-      if (interiors.empty() || !chainFitsSlack(root, tree)) continue;  // a single sum, or on the critical path
+      if (interiors.empty()) continue;  // a single sum
+      if (!orderByReadiness(root, tree) && !chainFitsSlack(root, tree)) continue;  // on the critical path
       for (NodeId id : interiors) absorbed_[id] = 1;
       terms_.insert(terms_.end(), tree.begin(), tree.end());
     }
@@ -143,13 +144,31 @@ class SumChainer {
     std::stable_sort(tree.begin(), tree.end(), [](const Term& a, const Term& b) { return a.at < b.at; });
   }
 
+  // When a chain of `terms` in this order ends (each add waits for its term).
+  std::uint32_t chainEnd(const std::vector<Term>& terms) const {
+    std::uint32_t end = earliest_[terms[0].node];
+    for (std::size_t i = 1; i < terms.size(); ++i) end = std::max(end, earliest_[terms[i].node]) + latency(Op::Add);
+    return end;
+  }
+
   // A chain is longer than a tree (one add after another): it is used only where its end
   // stays within the slack of the tree's root, so the function's critical path does not
   // grow (a serial algorithm such as a small robot's ABA runs at the speed of that path).
-  bool chainFitsSlack(NodeId root, const std::vector<Term>& tree) const {
-    std::uint32_t end = earliest_[tree[0].node];
-    for (std::size_t i = 1; i < tree.size(); ++i) end = std::max(end, earliest_[tree[i].node]) + latency(Op::Add);
-    return end <= latest_[root];
+  bool chainFitsSlack(NodeId root, const std::vector<Term>& tree) const { return chainEnd(tree) <= latest_[root]; }
+
+  // The terms in the order they are ready (constants first, the latest last), all added
+  // where the root was, when that chain ends sooner than both the tree and the chain in
+  // the tree's order: a composite inertia's constant and early terms are summed while its
+  // children's terms are computed, and the late ones join last, each in a multiply-add.
+  bool orderByReadiness(NodeId root, std::vector<Term>& tree) const {
+    if (!ready_first_) return false;
+    std::vector<Term> ready = tree;
+    std::stable_sort(ready.begin(), ready.end(),
+                     [&](const Term& a, const Term& b) { return earliest_[a.node] < earliest_[b.node]; });
+    if (chainEnd(ready) >= std::min(earliest_[root], chainEnd(tree))) return false;
+    for (Term& t : ready) t.at = root;
+    tree = std::move(ready);
+    return true;
   }
 
   void accumulate(const Term& t, Graph& to) {
@@ -170,6 +189,7 @@ class SumChainer {
 
   const Graph& g_;
   const FunctionDefinition& f_;
+  bool ready_first_;
   std::vector<char> needed_, absorbed_;
   std::vector<std::uint32_t> uses_, earliest_, latest_;
   std::vector<Op> user_op_;
@@ -179,8 +199,8 @@ class SumChainer {
 
 }  // namespace
 
-ChainedFunction chainSums(const Graph& graph, const FunctionDefinition& function) {
-  return SumChainer(graph, function).run();
+ChainedFunction chainSums(const Graph& graph, const FunctionDefinition& function, bool ready_first) {
+  return SumChainer(graph, function, ready_first).run();
 }
 
 }  // namespace robodiff::codegen::detail

@@ -1,8 +1,10 @@
 // Sums as chains: a tree of sums ((a b + c d) + (e f + g h)) rebuilt as one running sum
 // (((a b + c d) + e f) + g h) that takes each term where the tree took it, so the C
-// compiler fuses every product after the first into a multiply-add. A tree whose chain
-// would lengthen the function's critical path stays a tree. Why and what it bought:
-// docs/code-generation.md ("Sums as chains").
+// compiler fuses every product after the first into a multiply-add. With `ready_first`,
+// where a tree's terms are ready at different times, the chain takes them in that order
+// instead (the latest last) when that ends sooner. A tree whose chain would lengthen the
+// function's critical path stays a tree. Why and what it bought: docs/code-generation.md
+// ("Sums as chains").
 //
 // This reassociates: results may differ from the traced operations in the last bits.
 // The graph itself never reassociates (graph.hpp); this pass runs before lowering, so
@@ -19,6 +21,6 @@ struct ChainedFunction {
   FunctionDefinition function;  // the definition, its outputs renumbered into `graph`
 };
 
-ChainedFunction chainSums(const symbolic::Graph& graph, const FunctionDefinition& function);
+ChainedFunction chainSums(const symbolic::Graph& graph, const FunctionDefinition& function, bool ready_first);
 
 }  // namespace robodiff::codegen::detail
