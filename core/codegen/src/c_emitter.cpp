@@ -346,7 +346,8 @@ class ChunkPrinter {
           declared_pair_[slot] = 1;
           out_ << "  rd_pair p" << slot << ";\n";
         }
-        out_ << "  rd_sincos_pair" << kernelSuffix() << "(" << operand(ins.args[0]) << ", &p" << ins.dst << ", &p" << ins.dst2 << ");\n";
+        out_ << "  rd_sincos_pair" << kernelSuffix() << "(" << operand(ins.args[0]) << ", &p" << ins.dst << ", &p"
+             << ins.dst2 << ");\n";
         break;
       case InstrKind::SinCosQuad:
         for (std::uint32_t slot : {ins.dst, ins.dst2, ins.dst3, ins.dst4}) {
@@ -354,8 +355,8 @@ class ChunkPrinter {
           declared_pair_[slot] = 1;
           out_ << "  rd_pair p" << slot << ";\n";
         }
-        out_ << "  rd_sincos_quad" << kernelSuffix() << "(" << operand(ins.args[0]) << ", " << operand(ins.args[1]) << ", &p" << ins.dst << ", &p"
-             << ins.dst2 << ", &p" << ins.dst3 << ", &p" << ins.dst4 << ");\n";
+        out_ << "  rd_sincos_quad" << kernelSuffix() << "(" << operand(ins.args[0]) << ", " << operand(ins.args[1])
+             << ", &p" << ins.dst << ", &p" << ins.dst2 << ", &p" << ins.dst3 << ", &p" << ins.dst4 << ");\n";
         break;
       case InstrKind::SinCos:
         for (std::uint32_t slot : {ins.dst, ins.dst2}) {
@@ -363,8 +364,8 @@ class ChunkPrinter {
           declared_[slot] = 1;
           out_ << "  " << type() << " t" << slot << ";\n";
         }
-        out_ << "  " << (vector() ? "rd_sincos(" : cat("rd_sincos1", kernelSuffix(), "(")) << operand(ins.args[0]) << ", &t" << ins.dst << ", &t"
-             << ins.dst2 << ");\n";
+        out_ << "  " << (vector() ? "rd_sincos(" : cat("rd_sincos1", kernelSuffix(), "(")) << operand(ins.args[0])
+             << ", &t" << ins.dst << ", &t" << ins.dst2 << ");\n";
         break;
       case InstrKind::StoreOutput:
         if (vector())

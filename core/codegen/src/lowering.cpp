@@ -8,6 +8,7 @@
 #include "emission_order.hpp"
 #include "lane_pairs.hpp"
 #include "operand_ref.hpp"
+#include "robodiff/codegen/sincos_kernel.h"
 #include "sum_chains.hpp"
 #include "transfer_slots.hpp"
 
@@ -74,7 +75,7 @@ class Lowerer {
     for (const Step& s : steps_) {
       if (s.second == kNone) continue;
       const Ref x = resolve(g_, g_.node(s.first).args[0]);
-      if (x.is_constant && std::fabs(x.value) <= kSinCosKernelLimit) continue;
+      if (x.is_constant && std::fabs(x.value) <= RD_SC_LIMIT) continue;
       if (x.is_constant || g_.node(x.base).op != Op::Input) return {};
       elements.push_back(input_where_[g_.node(x.base).index]);
     }

@@ -94,9 +94,6 @@ struct LoweredFunction {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> sincos_inputs;
 };
 
-// sincos_kernel.h's range: |x| <= 2^19 (RD_SC_LIMIT).
-inline constexpr double kSinCosKernelLimit = 524288.0;
-
 // Lane pairs (lane_pairs.hpp): Off; Order: the pairs' order without pairs (the code
 // both flavours of a C library share parts and work buffer with); Emit: the pairs too.
 enum class LanePairMode : std::uint8_t { Off, Order, Emit };
