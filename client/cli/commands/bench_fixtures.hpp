@@ -95,7 +95,6 @@ template <class Time> double medianOverCopies(const Generated& g, Time&& time) {
   return t[t.size() / 2];
 }
 
-
 // Input and output buffers of `knots` knots (knot-major per block, abi.h) and a work
 // buffer, each on a 64-byte boundary; inputs drawn with seeds kSeed + knot.
 struct Buffers {
