@@ -135,6 +135,30 @@ TEST_P(Tracing, KinematicsAndFrameJacobians) {
   }
 }
 
+// ABA's value by M's tree factors: the same accelerations as ABA, with one division per
+// pivot (1 / D_k, shared by the factors, the solve and M^-1), not one per entry of L.
+TEST_P(Tracing, ForwardDynamicsByFactorsDividesOncePerPivot) {
+  Graph graph;
+  Tracer tracer(graph);
+  VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), ts = tracer.addInputs("tau", model.nv);
+  Data<Sym> ds(model);
+  Data<double> dd(model);
+  auto divisions = [&graph] {
+    int n = 0;
+    for (NodeId id = 0; id < graph.size(); ++id) n += graph.node(id).op == Op::Div;
+    return n;
+  };
+  const VecX<Sym> bias = ts - nonLinearEffects(model, ds, qs, vs);
+  MatX<Sym> factors = crba(model, ds, qs);
+  const int before = divisions();
+  const std::vector<int> lambda = dofParents(model);
+  factorizeMassMatrix(lambda, factors);
+  const VecX<Sym> ddq = solveWithFactors(lambda, factors, bias);
+  inverseFromFactors(lambda, factors);
+  EXPECT_LE(divisions() - before, model.nv);
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, ddq, tracedStack({&q, &v, &tau})), aba(model, dd, q, v, tau), 1e-12));
+}
+
 INSTANTIATE_TEST_SUITE_P(Robots, Tracing, ::testing::ValuesIn(tracingRobotCases()),
                          [](const auto& info) { return info.param.label; });
 

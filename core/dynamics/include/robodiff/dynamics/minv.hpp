@@ -33,11 +33,14 @@ inline std::vector<int> dofParents(const Model& model) {
 }
 
 // Overwrites the symmetric M with its factors: D on the diagonal, L strictly below
-// (the entries of L that are structurally zero are left as they were).
+// (the entries of L that are structurally zero are left as they were). Each pivot is
+// inverted once and its row multiplied: one division per pivot, not one per entry of L
+// (the solve and the inverse need the same 1 / D_k, so a trace shares it).
 template <class S> void factorizeMassMatrix(const std::vector<int>& lambda, MatX<S>& M) {
   for (int k = static_cast<int>(M.rows()) - 1; k >= 0; --k) {
+    const S inverse_pivot = S(1) / M(k, k);
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
-      const S a = M(k, i) / M(k, k);
+      const S a = M(k, i) * inverse_pivot;
       for (int j = i; j >= 0; j = lambda[j]) M(i, j) -= a * M(k, j);
       M(k, i) = a;
     }
