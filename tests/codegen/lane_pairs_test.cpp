@@ -184,11 +184,11 @@ TEST(LanePairs, TwinsInDifferentColumnsArePairedWhenSeededAtTwinsOnly) {
   EXPECT_EQ(generateLibrary(g, {f}).functions.at(0).lane_pairs, 0u);
 }
 
-// Sin and cos of three joint angles (inputs): the first two run in one kernel call in
-// two lanes, the third alone (kernels without checks of their own: the function checks
+// Sin and cos of three joint angles (inputs): one 256-bit kernel call, its fourth lane
+// repeating the third angle (kernels without checks of their own: the function checks
 // the angles at entry); every value as libm computes it (within 2 ulp), also where one
 // angle is beyond the kernel's range.
-TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
+TEST(LanePairs, SinAndCosOfThreeAnglesRunInOneQuadCall) {
   Graph g;
   std::vector<NodeId> values;
   for (std::uint32_t j = 0; j < 3; ++j) {
@@ -200,10 +200,11 @@ TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
   TempDir dir;
   const PairedBuild built = buildLimbs(g, f, dir, "angles", {});
   const std::string source = sourcesOf(built.generated);
-  const std::size_t first = source.find("rd_sincos_pair_in_range(p");
+  const std::size_t first = source.find("rd_sincos_quad_in_range(p");
   ASSERT_NE(first, std::string::npos) << source;
-  EXPECT_EQ(source.find("rd_sincos_pair_in_range(p", first + 1), std::string::npos) << "one call for two angles";
-  EXPECT_NE(source.find("rd_sincos1_in_range("), std::string::npos) << "the third angle alone";
+  EXPECT_EQ(source.find("rd_sincos_quad_in_range(p", first + 1), std::string::npos) << "one call for three angles";
+  EXPECT_EQ(source.find("  rd_sincos_pair_in_range(p"), std::string::npos) << source;
+  EXPECT_EQ(source.find("  rd_sincos1_in_range("), std::string::npos) << source;
   const CompiledFunction& fn = built.library.function("angles");
   using Angles = std::array<double, 3>;
   for (const Angles& q : {Angles{0.3, -2.5, 7.0}, Angles{1e6, 0.5, -1e7}, Angles{-0.0, 1e-300, 3.0}}) {
@@ -218,19 +219,26 @@ TEST(LanePairs, SinAndCosOfTwoAnglesRunInOneKernelCall) {
   }
 }
 
-// Seven angles: four in the lanes of one 256-bit kernel call, two in a pair, the last
-// alone; the same bits as the build without lane pairs (the scalar kernel), with angles
-// beyond the kernel's range among them (libm for them).
-TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
-  constexpr std::uint32_t kAngles = 7;
+struct KernelCalls {
+  std::uint32_t angles;
+  std::size_t quads, pairs, singles;
+};
+
+// Angles in groups of four: a 256-bit kernel call for four (or three), a pair for two,
+// the scalar kernel for one; the same bits as the build without lane pairs (the scalar
+// kernel), with angles beyond the kernel's range among them (libm for them).
+class SinCosGroups : public ::testing::TestWithParam<KernelCalls> {};
+
+TEST_P(SinCosGroups, SameBitsAsTheScalarKernel) {
+  const std::uint32_t n = GetParam().angles;
   Graph g;
   std::vector<NodeId> values;
-  for (std::uint32_t j = 0; j < kAngles; ++j) {
+  for (std::uint32_t j = 0; j < n; ++j) {
     const NodeId q = g.input(j);
     values.push_back(g.unary(Op::Sin, q));
     values.push_back(g.unary(Op::Cos, q));
   }
-  const FunctionDefinition f{"angles", {{"q", kAngles}}, {OutputBlock::dense("sc", 2 * kAngles, 1, values)}};
+  const FunctionDefinition f{"angles", {{"q", n}}, {OutputBlock::dense("sc", 2 * n, 1, values)}};
   TempDir dir;
   const PairedBuild quad = buildLimbs(g, f, dir, "quad", {});
   const std::string all = sourcesOf(quad.generated);
@@ -238,33 +246,39 @@ TEST(LanePairs, SinAndCosOfFourAnglesRunInOneQuadCall) {
   ASSERT_NE(paired, std::string::npos) << all;
   const std::string source = all.substr(paired, all.find("#else", paired) - paired);
   auto calls = [&](const std::string& call) {
-    std::size_t n = 0;
-    for (std::size_t at = source.find(call); at != std::string::npos; at = source.find(call, at + 1)) ++n;
-    return n;
+    std::size_t k = 0;
+    for (std::size_t at = source.find(call); at != std::string::npos; at = source.find(call, at + 1)) ++k;
+    return k;
   };
-  EXPECT_EQ(calls("  rd_sincos_quad_in_range(p"), 1u) << source;
-  EXPECT_EQ(calls("  rd_sincos_pair_in_range(p"), 1u) << source;
-  EXPECT_EQ(calls("  rd_sincos1_in_range("), 1u) << source;
+  EXPECT_EQ(calls("  rd_sincos_quad_in_range(p"), GetParam().quads) << source;
+  EXPECT_EQ(calls("  rd_sincos_pair_in_range(p"), GetParam().pairs) << source;
+  EXPECT_EQ(calls("  rd_sincos1_in_range("), GetParam().singles) << source;
   CodegenOptions off;
   off.lane_pairs = false;
   const PairedBuild plain = buildLimbs(g, f, dir, "plain", off);
   EXPECT_EQ(sourcesOf(plain.generated).find("rd_sincos_quad(p"), std::string::npos);
-  using Angles = std::array<double, kAngles>;
-  for (const Angles& q : {Angles{0.3, -2.5, 7.0, 1.25, -0.75, 100.0, 2.0}, Angles{1e6, 0.5, -1e7, 3.0, 0.1, 0.2, 0.3},
-                          Angles{-0.0, 1e-300, 3.0, 0x1p19, -1.5, 1e9, 0.4}}) {
-    std::vector<double> got(2 * kAngles), want(2 * kAngles), work(4096);
+  const std::vector<std::vector<double>> states = {{0.3, -2.5, 7.0, 1.25, -0.75, 100.0, 2.0},
+                                                   {1e6, 0.5, -1e7, 3.0, 0.1, 0.2, 0.3},
+                                                   {-0.0, 1e-300, 3.0, 0x1p19, -1.5, 1e9, 0.4},
+                                                   {0.1, 0.2, 0.3, 0.4, 0.5, 0x1p19, -1e300}};
+  for (const std::vector<double>& q : states) {
+    std::vector<double> got(2 * n), want(2 * n), work(4096);
     const double* in[] = {q.data()};
     double* outs[] = {got.data()};
     quad.library.function("angles").evaluate(in, outs, work.data());
     outs[0] = want.data();
     plain.library.function("angles").evaluate(in, outs, work.data());
-    for (std::uint32_t k = 0; k < 2 * kAngles; ++k) {
+    for (std::uint32_t k = 0; k < 2 * n; ++k) {
       EXPECT_EQ(got[k], want[k]) << "angle " << q[k / 2] << (k % 2 ? " cos" : " sin");
       const double exact = k % 2 ? std::cos(q[k / 2]) : std::sin(q[k / 2]);
       EXPECT_TRUE(closeRelative(got[k], exact, 1e-15) || std::fabs(got[k] - exact) < 1e-300) << q[k / 2];
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Angles, SinCosGroups,
+                         ::testing::Values(KernelCalls{5, 1, 0, 1}, KernelCalls{6, 1, 1, 0}, KernelCalls{7, 2, 0, 0}),
+                         [](const auto& info) { return std::to_string(info.param.angles) + "_angles"; });
 
 // What the function builder compares two ways of building by: the single-knot
 // instructions, one per operation less one per lane pair, as the library lowers it.

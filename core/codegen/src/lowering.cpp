@@ -437,8 +437,8 @@ class Lowerer {
     }
   }
 
-  // With lane pairs (LanePairMode::Emit), sin and cos of two or four arguments run in
-  // the lanes of one kernel call (rd_sincos_pair; rd_sincos_quad, 256 bits, for four):
+  // With lane pairs (LanePairMode::Emit), sin and cos of two to four arguments run in
+  // the lanes of one kernel call (rd_sincos_pair; rd_sincos_quad, 256 bits, for 3 or 4):
   // a step's sin and cos and those of the next sin-cos steps of the chunk whose
   // arguments can be read now (an input, or a value of this chunk already computed).
   // The kernel is ~35 instructions whatever the lanes.
@@ -457,24 +457,24 @@ class Lowerer {
     std::size_t n = 1;
     for (It later = laterSinCos(it, end); later != end && n < 4; later = laterSinCos(later, end)) steps[n++] = &*later;
     if (n == 1) return false;
-    if (n == 3) n = 2;  // a quad's fourth lane idle measured slower than a pair and a lone kernel
+    const std::size_t packs = (n + 1) / 2;  // three angles: the quad's fourth lane repeats the third
     Instr ins;
-    ins.kind = n == 2 ? InstrKind::SinCosPair : InstrKind::SinCosQuad;
-    for (std::size_t p = 0; 2 * p < n; ++p) {  // the arguments packed two by two
+    ins.kind = packs == 1 ? InstrKind::SinCosPair : InstrKind::SinCosQuad;
+    for (std::size_t p = 0; p < packs; ++p) {  // the arguments packed two by two
       Instr pack;
       pack.kind = InstrKind::PackPair;
       for (std::size_t l = 0; l < 2; ++l)
-        pack.args[l] = scalarOperand(resolve(g_, g_.node(steps[2 * p + l]->first).args[0]), chunk);
+        pack.args[l] = scalarOperand(resolve(g_, g_.node(steps[std::min(2 * p + l, n - 1)]->first).args[0]), chunk);
       pack.dst = allocatePair();
       chunk.code.push_back(pack);
       ins.args[p].kind = Operand::Kind::Pair;
       ins.args[p].slot = pack.dst;
     }
     releaseDying(pos, {it->first});
-    for (std::size_t p = 0; 2 * p < n; ++p) releasePair(ins.args[p].slot);
+    for (std::size_t p = 0; p < packs; ++p) releasePair(ins.args[p].slot);
     std::uint32_t* results[4] = {&ins.dst, &ins.dst2, &ins.dst3, &ins.dst4};  // sin, cos of each pack
-    for (std::size_t r = 0; r < n; ++r) *results[r] = allocatePair();
-    for (std::size_t r = 0; r < n; ++r) pair_live_[*results[r]] = 2;
+    for (std::size_t r = 0; r < 2 * packs; ++r) *results[r] = allocatePair();
+    for (std::size_t r = 0; r < 2 * packs; ++r) pair_live_[*results[r]] = r / 2 + 1 < packs || n % 2 == 0 ? 2 : 1;
     chunk.code.push_back(ins);
     chunk.operations += static_cast<std::uint32_t>(n);
     ++sincos_lane_pairs_;
