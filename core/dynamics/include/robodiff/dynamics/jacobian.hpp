@@ -47,19 +47,26 @@ namespace detail {
 
 // LOCAL_WORLD_ALIGNED from the placements alone: column (joint j, k) is
 // [R s_lin + (p_j - p_f) x R s_ang; R s_ang] with oMi = (R, p_j): one cross product with the
-// joint-to-frame offset, where the world column and the shift to the frame take two.
+// joint-to-frame offset, where the world column and the shift to the frame take two. The
+// offsets are summed from the frame towards the root, each joint's link rotated into the
+// world (p_parent - p_j = -R_parent t_j), never as a difference of world positions: no
+// subtraction is left at the end of the chain, and nothing cancels where the robot stands
+// far from the origin.
 template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, const Data<S>& data, int frame_index) {
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
-  const Vec3<S> p_frame = framePlacement(model, data, frame_index).translation;
-  for (int j = model.frames[frame_index].parent_joint; j >= 0; j = model.joints[j].parent) {
+  const Frame& frame = model.frames[frame_index];
+  if (frame.parent_joint < 0) return J;
+  const Vec3<S> to_frame = data.oMi[frame.parent_joint].rotation * asScalar<S>(frame.placement).translation;
+  Vec3<S> offset = -to_frame;  // p_j - p_f
+  for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
     const Joint& joint = model.joints[j];
     const SE3<S>& oMi = data.oMi[j];
-    const Vec3<S> offset = oMi.translation - p_frame;
     for (int k = 0; k < joint.nv; ++k) {
       const Motion<S> s = rotatedSubspaceColumn(joint, oMi.rotation, k);
       J.template block<3, 1>(3, joint.idx_v + k) = s.angular;
       J.template block<3, 1>(0, joint.idx_v + k) = s.linear + offset.cross(s.angular);
     }
+    if (joint.parent >= 0) offset -= data.oMi[joint.parent].rotation * data.liMi[j].translation;
   }
   return J;
 }
