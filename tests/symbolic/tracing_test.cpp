@@ -36,7 +36,6 @@ std::vector<RobotCase> tracingRobotCases() {
 class Tracing : public ::testing::TestWithParam<RobotCase> {
  protected:
   void SetUp() override {
-    model = loadUrdfString(generateRobotUrdf(GetParam().options), GetParam().root, GetParam().label);
     std::mt19937_64 rng(42);
     std::uniform_real_distribution<double> u(-1, 1);
     q = randomConfiguration(model, rng);
@@ -55,8 +54,21 @@ class Tracing : public ::testing::TestWithParam<RobotCase> {
     return out;
   }
 
-  Model model;
+  // q, v and a third block (a or tau) as the tracer's inputs, in that order.
+  struct StateInputs {
+    VecX<Sym> q, v, third;
+  };
+  StateInputs addStateInputs(Tracer& tracer, const char* third) const {
+    return {tracer.addInputs("q", model.nq), tracer.addInputs("v", model.nv), tracer.addInputs(third, model.nv)};
+  }
+
+  Model model = loadUrdfString(generateRobotUrdf(GetParam().options), GetParam().root, GetParam().label);
   Eigen::VectorXd q, v, a, tau;
+  // Each test traces into its own graph.
+  Graph graph;
+  Tracer tracer{graph};
+  Data<Sym> ds{model};
+  Data<double> dd{model};
 };
 
 Eigen::VectorXd tracedStack(std::initializer_list<const Eigen::VectorXd*> parts) {
@@ -72,52 +84,33 @@ Eigen::VectorXd tracedStack(std::initializer_list<const Eigen::VectorXd*> parts)
 }
 
 TEST_P(Tracing, Rnea) {
-  Graph graph;
-  Tracer tracer(graph);
-  VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), as = tracer.addInputs("a", model.nv);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, rnea(model, ds, qs, vs, as), tracedStack({&q, &v, &a})),
+  const StateInputs in = addStateInputs(tracer, "a");
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, rnea(model, ds, in.q, in.v, in.third), tracedStack({&q, &v, &a})),
                             rnea(model, dd, q, v, a), 1e-12));
 }
 
 TEST_P(Tracing, Aba) {
-  Graph graph;
-  Tracer tracer(graph);
-  VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), ts = tracer.addInputs("tau", model.nv);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, aba(model, ds, qs, vs, ts), tracedStack({&q, &v, &tau})),
+  const StateInputs in = addStateInputs(tracer, "tau");
+  EXPECT_TRUE(matricesAgree(evaluate(tracer, aba(model, ds, in.q, in.v, in.third), tracedStack({&q, &v, &tau})),
                             aba(model, dd, q, v, tau), 1e-12));
 }
 
 TEST_P(Tracing, CrbaAndGravity) {
-  Graph graph;
-  Tracer tracer(graph);
   VecX<Sym> qs = tracer.addInputs("q", model.nq);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
   EXPECT_TRUE(matricesAgree(evaluate(tracer, crba(model, ds, qs), q), crba(model, dd, q), 1e-12));
   EXPECT_TRUE(matricesAgree(evaluate(tracer, computeGeneralizedGravity(model, ds, qs), q),
                             computeGeneralizedGravity(model, dd, q), 1e-12));
 }
 
 TEST_P(Tracing, Regressor) {
-  Graph graph;
-  Tracer tracer(graph);
-  VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), as = tracer.addInputs("a", model.nv);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
-  EXPECT_TRUE(matricesAgree(evaluate(tracer, jointTorqueRegressor(model, ds, qs, vs, as), tracedStack({&q, &v, &a})),
-                            jointTorqueRegressor(model, dd, q, v, a), 1e-12));
+  const StateInputs in = addStateInputs(tracer, "a");
+  EXPECT_TRUE(matricesAgree(
+      evaluate(tracer, jointTorqueRegressor(model, ds, in.q, in.v, in.third), tracedStack({&q, &v, &a})),
+      jointTorqueRegressor(model, dd, q, v, a), 1e-12));
 }
 
 TEST_P(Tracing, KinematicsAndFrameJacobians) {
-  Graph graph;
-  Tracer tracer(graph);
   VecX<Sym> qs = tracer.addInputs("q", model.nq);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
   forwardKinematics(model, ds, qs);
   updateFramePlacements(model, ds);
   forwardKinematics(model, dd, q);
@@ -138,18 +131,14 @@ TEST_P(Tracing, KinematicsAndFrameJacobians) {
 // ABA's value by M's tree factors: the same accelerations as ABA, with one division per
 // pivot (1 / D_k, shared by the factors, the solve and M^-1), not one per entry of L.
 TEST_P(Tracing, ForwardDynamicsByFactorsDividesOncePerPivot) {
-  Graph graph;
-  Tracer tracer(graph);
-  VecX<Sym> qs = tracer.addInputs("q", model.nq), vs = tracer.addInputs("v", model.nv), ts = tracer.addInputs("tau", model.nv);
-  Data<Sym> ds(model);
-  Data<double> dd(model);
-  auto divisions = [&graph] {
+  const StateInputs in = addStateInputs(tracer, "tau");
+  auto divisions = [this] {
     int n = 0;
     for (NodeId id = 0; id < graph.size(); ++id) n += graph.node(id).op == Op::Div;
     return n;
   };
-  const VecX<Sym> bias = ts - nonLinearEffects(model, ds, qs, vs);
-  MatX<Sym> factors = crba(model, ds, qs);
+  const VecX<Sym> bias = in.third - nonLinearEffects(model, ds, in.q, in.v);
+  MatX<Sym> factors = crba(model, ds, in.q);
   const int before = divisions();
   const std::vector<int> lambda = dofParents(model);
   factorizeMassMatrix(lambda, factors);
