@@ -474,7 +474,10 @@ class Lowerer {
     for (std::size_t p = 0; p < packs; ++p) releasePair(ins.args[p].slot);
     std::uint32_t* results[4] = {&ins.dst, &ins.dst2, &ins.dst3, &ins.dst4};  // sin, cos of each pack
     for (std::size_t r = 0; r < 2 * packs; ++r) *results[r] = allocatePair();
-    for (std::size_t r = 0; r < 2 * packs; ++r) pair_live_[*results[r]] = r / 2 + 1 < packs || n % 2 == 0 ? 2 : 1;
+    for (std::size_t r = 0; r < 2 * packs; ++r) {
+      const bool repeated_lane = n % 2 == 1 && r / 2 == packs - 1;  // three angles: lane 1 is never read
+      pair_live_[*results[r]] = repeated_lane ? 1 : 2;
+    }
     chunk.code.push_back(ins);
     chunk.operations += static_cast<std::uint32_t>(n);
     ++sincos_lane_pairs_;

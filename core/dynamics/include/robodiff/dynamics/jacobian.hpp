@@ -56,8 +56,7 @@ template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, con
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
   const Frame& frame = model.frames[frame_index];
   if (frame.parent_joint < 0) return J;
-  const Vec3<S> to_frame = data.oMi[frame.parent_joint].rotation * asScalar<S>(frame.placement).translation;
-  Vec3<S> offset = -to_frame;  // p_j - p_f
+  Vec3<S> offset = -(data.oMi[frame.parent_joint].rotation * asScalar<S>(frame.placement).translation);  // p_j - p_f
   for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
     const Joint& joint = model.joints[j];
     const SE3<S>& oMi = data.oMi[j];
