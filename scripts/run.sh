@@ -18,6 +18,6 @@ cd "$(dirname "$0")/.."
 
 deploy/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j"$(nproc)" --target robodiff_cli robodiff_worker robodiffd service_demo
+cmake --build build -j"$(nproc)" --target robodiff_cli robodiff_worker robodiffd service_demo mpc_user_horizon
 
 exec scripts/run-service.sh build
