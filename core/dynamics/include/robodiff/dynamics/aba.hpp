@@ -33,7 +33,7 @@ const VecX<S>& aba(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q>
     data.c[j] = data.v[j].cross(jointMotion<S>(model.joints[j], v));
     const auto& I = asScalar<S>(model.bodies[j]);
     data.Ia[j] = I.matrix();
-    data.pA[j] = data.v[j].cross(I * data.v[j]);
+    data.pA[j] = I.dynamicForce(data.v[j], Motion<S>::Zero());  // v x* (I v)
     if (fext) data.pA[j] -= (*fext)[j];
   }
   // Pass 2, leaves to root: articulated inertias and bias forces.

@@ -38,7 +38,7 @@ const VecX<S>& rnea(const Model& model, Data<S>& data, const Eigen::MatrixBase<Q
   detail::accelerationPass(model, data, q, v, a, gravityAcceleration<S>(model));
   for (int j = 0; j < model.njoints(); ++j) {
     const auto& I = asScalar<S>(model.bodies[j]);
-    data.f[j] = I * data.a[j] + data.v[j].cross(I * data.v[j]);
+    data.f[j] = I.dynamicForce(data.v[j], data.a[j]);
     if (fext) data.f[j] -= (*fext)[j];
   }
   detail::rneaBackward(model, data);

@@ -42,6 +42,19 @@ template <class S> struct Inertia {
     }
   }
 
+  // I a + v x* (I v): the force that gives the body acceleration a at twist v. Newton's
+  // and Euler's equations at the centre of mass, the force then moved to the origin:
+  // equal to the two products and the cross product, in fewer operations
+  // (docs/code-generation.md, "Each body's force at its centre of mass").
+  Force<S> dynamicForce(const Motion<S>& v, const Motion<S>& a) const {
+    const Vec3<S>& w = v.angular;
+    const Vec3<S> com_velocity = v.linear - lever.cross(w);
+    const Vec3<S> com_acceleration = a.linear - lever.cross(a.angular);
+    const Vec3<S> f = mass * (com_acceleration + w.cross(com_velocity));
+    const Vec3<S> spin = inertia * w;
+    return {f, inertia * a.angular + w.cross(spin) + lever.cross(f)};
+  }
+
   // The 6x6 matrix ([linear; angular] ordering).
   Mat6<S> matrix() const {
     Mat6<S> m;
