@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
-#include "emission_order.hpp"
 #include "lane_pairs.hpp"
 #include "operand_ref.hpp"
+#include "step_schedule.hpp"
 #include "robodiff/codegen/sincos_kernel.h"
 #include "sum_chains.hpp"
 #include "transfer_slots.hpp"
@@ -53,21 +52,6 @@ class Lowerer {
   }
 
  private:
-  bool isComputed(NodeId id) const {
-    const Node& n = g_.node(id);
-    NodeId operand;
-    return n.op != Op::Constant && n.op != Op::Input && !isNegation(g_, n, &operand);
-  }
-
-  // A unary operation that becomes a library call (sin, cos, exp, ...), not an instruction.
-  bool isCall(NodeId id) const {
-    switch (g_.node(id).op) {
-      case Op::Sin: case Op::Cos: case Op::Tan: case Op::Asin: case Op::Acos: case Op::Atan:
-      case Op::Exp: case Op::Log: case Op::Tanh: return true;
-      default: return false;
-    }
-  }
-
   // The input elements whose sin and cos the kernels compute; empty where any kernel's
   // argument is not an input (nor a constant in the kernel's range).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> sincosInputs() const {
@@ -118,97 +102,14 @@ class Lowerer {
     std::reverse(prologue_.begin(), prologue_.end());
   }
 
-  // The trace's order, or output by output for a large function (emission_order.hpp).
-  std::vector<NodeId> computeOrder() const {
-    std::uint32_t operations = 0;
-    for (NodeId id = 0; id < n_; ++id) operations += needed_[id] && isComputed(id) ? 1 : 0;
-    if (options_.output_order_from > 0 && operations >= options_.output_order_from) return outputConeOrder(g_, f_);
-    std::vector<NodeId> trace(n_);
-    for (NodeId id = 0; id < n_; ++id) trace[id] = id;
-    return trace;
-  }
-
+  // The steps, their chunks and lane pairs (step_schedule.hpp).
   void schedule() {
-    std::unordered_map<NodeId, NodeId> sin_of, cos_of;  // argument -> node
-    for (NodeId id = 0; id < n_; ++id) {
-      if (!needed_[id]) continue;
-      const Node& n = g_.node(id);
-      if (n.op == Op::Sin) sin_of[n.args[0]] = id;
-      if (n.op == Op::Cos) cos_of[n.args[0]] = id;
-    }
-    // Transcendental functions of inputs (sin/cos of joint angles) come first: most are
-    // library calls (W calls in the SIMD variant) that clobber every register, so values
-    // live across them are spilled; computed before anything else, only their own
-    // results are live. Measured: a Talos part whose 61 sincos calls were interleaved
-    // with the kinematics took gcc 48 s and 820 MB to compile, 1.5 s once hoisted.
-    // (sin and cos of one argument are now an inline kernel, which keeps its fallback
-    // call for huge arguments: hoisted too.)
-    std::vector<NodeId> order;
-    order.reserve(needed_count_);
-    for (NodeId id = 0; id < n_; ++id)
-      if (needed_[id] && isCall(id) && g_.node(g_.node(id).args[0]).op == Op::Input) order.push_back(id);
-    for (NodeId id : computeOrder())
-      if (needed_[id] && !(isCall(id) && g_.node(g_.node(id).args[0]).op == Op::Input)) order.push_back(id);
-    std::vector<char> done(n_, 0);
-    for (NodeId id : order) {
-      if (done[id] || !isComputed(id)) continue;
-      const Node& n = g_.node(id);
-      Step s{id};
-      if (n.op == Op::Sin || n.op == Op::Cos) {
-        auto& partners = n.op == Op::Sin ? cos_of : sin_of;
-        auto it = partners.find(n.args[0]);
-        if (it != partners.end()) {
-          s.first = n.op == Op::Sin ? id : it->second;
-          s.second = n.op == Op::Sin ? it->second : id;
-          done[it->second] = 1;
-          ++sincos_pairs_;
-        }
-      }
-      done[id] = 1;
-      steps_.push_back(s);
-    }
-    if (options_.lane_pairs != LanePairMode::Off) pairSteps();
-    assignChunks();
-    if (options_.lane_pairs == LanePairMode::Order) splitPairs();
-  }
-
-  // Chunks of at most split_threshold operations, in the order of the steps.
-  void assignChunks() {
-    std::uint32_t ops_in_chunk = 0;
-    chunk_count_ = 1;
-    for (Step& s : steps_) {
-      const std::uint32_t ops = s.second == kNone && s.lane1 == kNone ? 1 : 2;
-      if (options_.split_threshold > 0 && ops_in_chunk > 0 && ops_in_chunk + ops > options_.split_threshold) {
-        ++chunk_count_;
-        ops_in_chunk = 0;
-      }
-      ops_in_chunk += ops;
-      s.chunk = chunk_count_ - 1;
-    }
-  }
-
-  // Lane pairs (lane_pairs.hpp), the steps reordered so that each pair is one step. In
-  // LanePairMode::Order each pair becomes two steps again once the chunks are cut, so
-  // that the code without pairs has the same parts and work buffer as the code with them.
-  void pairSteps() {
-    const double coverage = f_.lane_pairs == LanePairSeeds::Twins ? kTwinPairCoverage : kLanePairCoverage;
-    pairs_ = scheduleLanePairs(g_, f_, coverage, kLanePairsBelow, steps_);
-    if (pairs_.count() == 0) return;
-    twin_.assign(n_, kNone);
-    for (const Step& s : steps_)
-      if (s.lane1 != kNone) twin_[s.first] = s.lane1;
-  }
-
-  // Each pair step as two steps, one after the other, in the pair's chunk.
-  void splitPairs() {
-    std::vector<Step> steps;
-    steps.reserve(steps_.size() + pairs_.count());
-    for (const Step& s : steps_) {
-      steps.push_back(Step{s.first, s.second, kNone, s.chunk});
-      if (s.lane1 != kNone) steps.push_back(Step{s.lane1, kNone, kNone, s.chunk});
-    }
-    steps_ = std::move(steps);
-    pairs_ = LanePairs(n_);
+    StepSchedule s = scheduleSteps(g_, f_, options_, needed_, needed_count_);
+    steps_ = std::move(s.steps);
+    chunk_count_ = s.chunks;
+    sincos_pairs_ = s.sincos_pairs;
+    pairs_ = std::move(s.pairs);
+    twin_ = std::move(s.twin);
   }
 
   void assignTransfers() {
