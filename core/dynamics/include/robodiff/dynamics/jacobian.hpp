@@ -46,26 +46,27 @@ const Matrix6X<S>& computeJointJacobians(const Model& model, Data<S>& data, cons
 namespace detail {
 
 // LOCAL_WORLD_ALIGNED from the placements alone: column (joint j, k) is
-// [R s_lin + (p_j - p_f) x R s_ang; R s_ang] with oMi = (R, p_j): one cross product with the
-// joint-to-frame offset, where the world column and the shift to the frame take two. The
-// offsets are summed from the frame towards the root, each joint's link rotated into the
-// world (p_parent - p_j = -R_parent t_j), never as a difference of world positions: no
-// subtraction is left at the end of the chain, and nothing cancels where the robot stands
-// far from the origin.
+// R_j [s_lin + s_ang x u_j; s_ang], with R_j joint j's world rotation, s its subspace
+// column in its own frame and u_j = p_f - p_j in joint j's frame. The offsets u_j are
+// summed from the frame towards the root in the joints' own frames (u_parent =
+// liMi u_j + t_j), so they wait only on each joint's own sin and cos, not on the chain
+// of world rotations, and no world position enters: nothing cancels where the robot
+// stands far from the origin.
 template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, const Data<S>& data, int frame_index) {
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
   const Frame& frame = model.frames[frame_index];
   if (frame.parent_joint < 0) return J;
-  Vec3<S> offset = -(data.oMi[frame.parent_joint].rotation * asScalar<S>(frame.placement).translation);  // p_j - p_f
+  const Mat3<S> own_frame = Mat3<S>::Identity();
+  Vec3<S> to_frame = asScalar<S>(frame.placement).translation;  // u_j
   for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
     const Joint& joint = model.joints[j];
-    const SE3<S>& oMi = data.oMi[j];
+    const Mat3<S>& R = data.oMi[j].rotation;
     for (int k = 0; k < joint.nv; ++k) {
-      const Motion<S> s = rotatedSubspaceColumn(joint, oMi.rotation, k);
-      J.template block<3, 1>(3, joint.idx_v + k) = s.angular;
-      J.template block<3, 1>(0, joint.idx_v + k) = s.linear + offset.cross(s.angular);
+      const Motion<S> s = rotatedSubspaceColumn(joint, own_frame, k);
+      J.template block<3, 1>(3, joint.idx_v + k) = rotatedSubspaceColumn(joint, R, k).angular;
+      J.template block<3, 1>(0, joint.idx_v + k) = R * Vec3<S>(s.linear + s.angular.cross(to_frame));
     }
-    if (joint.parent >= 0) offset -= data.oMi[joint.parent].rotation * data.liMi[j].translation;
+    if (joint.parent >= 0) to_frame = data.liMi[j].act(to_frame);
   }
   return J;
 }
