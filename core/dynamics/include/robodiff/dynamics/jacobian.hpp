@@ -56,13 +56,12 @@ template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, con
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
   const Frame& frame = model.frames[frame_index];
   if (frame.parent_joint < 0) return J;
-  const Mat3<S> own_frame = Mat3<S>::Identity();
   Vec3<S> to_frame = asScalar<S>(frame.placement).translation;  // u_j
   for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
     const Joint& joint = model.joints[j];
     const Mat3<S>& R = data.oMi[j].rotation;
     for (int k = 0; k < joint.nv; ++k) {
-      const Motion<S> s = rotatedSubspaceColumn(joint, own_frame, k);
+      const Motion<S> s = subspaceColumn<S>(joint, k);
       J.template block<3, 1>(3, joint.idx_v + k) = rotatedSubspaceColumn(joint, R, k).angular;
       J.template block<3, 1>(0, joint.idx_v + k) = R * Vec3<S>(s.linear + s.angular.cross(to_frame));
     }
