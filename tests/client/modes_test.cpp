@@ -132,7 +132,7 @@ TEST(ClientModes, LocalWithoutAServerUsesTheCache) {
   SharedServer& shared = SharedServer::get();
   client::ClientOptions options = shared.server().options(Mode::Local);
   options.server.shm_service = "robodiff-nobody-" + std::to_string(::getpid());
-  options.server.dds_domain = (testDomain() + 100) % 230;  // no server there
+  options.server.dds_domain = emptyTestDomain();  // no server there
   Client local(options);
   EXPECT_EQ(local.mode(), Mode::Local);
   const client::ModelInfo m = local.loadModel(arm7Text());
@@ -173,7 +173,7 @@ TEST(ClientModes, LocalWithoutACompilerFindsTheLibraryByItsPortableKey) {
   SharedServer& shared = SharedServer::get();
   client::ClientOptions options = shared.server().options(Mode::Local);
   options.server.shm_service = "robodiff-nobody-" + std::to_string(::getpid());
-  options.server.dds_domain = (testDomain() + 100) % 230;  // no server there
+  options.server.dds_domain = emptyTestDomain();  // no server there
   const char* cc = std::getenv("CC");
   const std::string saved = cc ? cc : "";
   ::setenv("CC", "/nonexistent/cc", 1);
@@ -204,7 +204,7 @@ TEST(ClientModes, AnInsistedModeThatCannotBeReachedIsUnavailable) {
   shm.server.shm_service = "robodiff-nobody";
   expectUnavailable(shm, "robodiff-nobody");
   client::ClientOptions dds = shared.server().options(Mode::Dds, std::chrono::milliseconds(300));
-  dds.server.dds_domain = (testDomain() + 100) % 230;
+  dds.server.dds_domain = emptyTestDomain();
   expectUnavailable(dds, "domain " + std::to_string(dds.server.dds_domain));
   client::ClientOptions local = shared.server().options(Mode::Local);
   local.cache_dir = "/nonexistent/robodiff-cache";

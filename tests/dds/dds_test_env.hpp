@@ -1,7 +1,7 @@
 #pragma once
 // What every DDS transport test shares: the loopback configuration (CYCLONEDDS_URI pointing at
-// deploy/cyclonedds-loopback.xml) and a DDS domain of its own per test process, so that
-// parallel ctest runs never see each other's servers.
+// deploy/cyclonedds-loopback.xml) and a DDS domain of its own per test process
+// (support/dds_domain.hpp), so that parallel ctest runs never see each other's servers.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,15 +12,10 @@
 #include <filesystem>
 #include <thread>
 
+#include "support/dds_domain.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff::testing {
-
-// 1 .. 200; `band` 1 gives 201 .. 229 (a domain for a test that leaves a dead participant).
-// 230, the last a DDS Security governance may name, is the fleet tests' (tests/fleet).
-inline std::uint32_t testDomain(int band = 0) {
-  return band == 0 ? static_cast<std::uint32_t>(1 + getpid() % 200) : static_cast<std::uint32_t>(201 + getpid() % 29);
-}
 
 inline void useLoopbackConfig() {
   const auto xml = sourceDir() / "deploy" / "cyclonedds-loopback.xml";

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <thread>
 
 #include "workers/worker_fixtures.hpp"
@@ -333,6 +334,8 @@ TEST_P(EndToEnd, EightConcurrentClients) {
   for (int k = 0; k < 8; ++k) refs.push_back(RneaReference::at(model_, 200 + k));
   constexpr int kCalls = 150;
   std::atomic<int> good{0}, bad{0};
+  std::mutex first_failure_mutex;
+  std::string first_failure;  // what the first bad call got, for the failure message
   std::vector<std::thread> clients;
   for (int t = 0; t < 8; ++t)
     clients.emplace_back([&, t] {
@@ -341,11 +344,20 @@ TEST_P(EndToEnd, EightConcurrentClients) {
         const RneaReference& r = refs[(t + i) % refs.size()];
         std::vector<double> out(154);
         const Status s = c->evaluate(id, {r.inputs.data(), 21}, out);
-        (s.ok() && r.matches(out) ? good : bad)++;
+        const ::testing::AssertionResult match = s.ok() ? r.matches(out) : ::testing::AssertionFailure();
+        if (match) {
+          ++good;
+          continue;
+        }
+        ++bad;
+        std::lock_guard lock(first_failure_mutex);
+        if (first_failure.empty())
+          first_failure = "client " + std::to_string(t) + ", call " + std::to_string(i) + ": " +
+                          (s.ok() ? match.message() : std::string(toString(s.code)) + ": " + s.message);
       }
     });
   for (std::thread& t : clients) t.join();
-  EXPECT_EQ(good.load(), 8 * kCalls);
+  EXPECT_EQ(good.load(), 8 * kCalls) << first_failure << "\n" << log();
   EXPECT_EQ(bad.load(), 0);
 }
 

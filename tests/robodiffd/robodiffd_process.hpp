@@ -20,22 +20,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "support/dds_domain.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff::testing {
 
 inline std::filesystem::path robodiffdPath() { return ROBODIFFD_PATH; }
-
-// A DDS domain of this test process's own (ctest runs several at once); fixed at the
-// first call, so that a forked child uses its parent's. ROBODIFF_TEST_DDS_DOMAIN, when set,
-// names it instead (the fleet tests take one no other test uses).
-inline int testDomain() {
-  static const int domain = [] {
-    if (const char* fixed = std::getenv("ROBODIFF_TEST_DDS_DOMAIN")) return std::atoi(fixed);
-    return 1 + static_cast<int>(getpid() % 200);
-  }();
-  return domain;
-}
 
 // Points Cyclone DDS at the loopback configuration of deploy/ for this process and its
 // children.

@@ -22,6 +22,7 @@
 
 #include "robodiff.h"  // idlc's C types of build/schema/robodiff.idl
 #include "robodiff/schema/status.hpp"
+#include "support/dds_domain.hpp"
 #include "support/test_paths.hpp"
 
 namespace robodiff {
@@ -353,8 +354,6 @@ struct Endpoints {
   }
 };
 
-dds_domainid_t testDomain() { return static_cast<dds_domainid_t>(1 + getpid() % 200); }
-
 // The client side, in the child: exit codes say what failed.
 int runClient(dds_domainid_t domain, const std::string& suffix) {
   Endpoints ep(domain, suffix, /*server=*/false);
@@ -399,7 +398,7 @@ class SchemaDds : public ::testing::Test {
 
 TEST_F(SchemaDds, EnvelopesRoundTripBetweenProcessesOnLoopback) {
   const auto start = Clock::now();
-  const dds_domainid_t domain = testDomain();
+  const auto domain = static_cast<dds_domainid_t>(testing::testDomain());
   const std::string suffix = std::to_string(getpid());
   // Fork before this process touches DDS, so that the child gets a clean runtime.
   const pid_t child = fork();
