@@ -13,6 +13,7 @@
 // Entries of joints on different branches stay zero.
 #pragma once
 
+#include <cmath>
 #include <type_traits>
 
 #include "robodiff/dynamics/data.hpp"
@@ -45,6 +46,28 @@ template <class S> void mirrorUpperTriangle(const Model& model, MatX<S>& M) {
   }
 }
 
+// Whether every entry of a rotation is 0 or +-1 (axes swapped or flipped, if at all).
+inline bool permutesAxes(const Mat3<double>& R) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (R(r, c) != 0.0 && std::abs(R(r, c)) != 1.0) return false;
+  return true;
+}
+
+// Joint j's composite inertia in its parent's frame. A revolute joint about a coordinate
+// axis whose placement only permutes axes: about the axis first (rotatedAboutAxis), then
+// by the placement, whose rotation costs nothing traced; otherwise by liMi at once.
+template <class S, class Q>
+InertiaSum<S> compositeInParent(const Model& model, const Data<S>& data, int j, const Eigen::MatrixBase<Q>& q) {
+  const Joint& joint = model.joints[j];
+  if (joint.type != JointType::Revolute || joint.axis_kind == AxisKind::Unaligned || !permutesAxes(joint.placement.rotation))
+    return data.Ycrb[j].transformedBy(data.liMi[j]);
+  const S& angle = q[joint.idx_q];
+  const InertiaSum<S> turned = rotatedAboutAxis(data.Ycrb[j], axisIndex(joint.axis_kind), S(math::cos(angle)),
+                                                S(math::sin(angle)));
+  return turned.transformedBy(asScalar<S>(joint.placement));
+}
+
 }  // namespace detail
 
 template <class S, class Q>
@@ -59,7 +82,7 @@ const MatX<S>& crbaJointFrames(const Model& model, Data<S>& data, const Eigen::M
     const Joint& joint = model.joints[j];
     for (int k = 0; k < joint.nv; ++k)
       detail::crbaColumn(model, data, j, joint.idx_v + k, data.Ycrb[j] * subspaceColumn<S>(joint, k));
-    if (joint.parent >= 0) data.Ycrb[joint.parent] += data.Ycrb[j].transformedBy(data.liMi[j]);
+    if (joint.parent >= 0) data.Ycrb[joint.parent] += detail::compositeInParent(model, data, j, q);
   }
   detail::mirrorUpperTriangle(model, data.M);
   return data.M;
