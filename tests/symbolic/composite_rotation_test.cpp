@@ -49,7 +49,7 @@ TEST(CompositeRotation, EqualsTheTransformByTheJointsPlacement) {
       const Eigen::VectorXd q = Eigen::VectorXd::Constant(1, angle(rng));
       const InertiaSum<double> expected = y.transformedBy(jointPlacement<double>(joint, q));
       const InertiaSum<double> got =
-          rotatedAboutAxis(y, k, std::cos(q[0]), std::sin(q[0])).transformedBy(joint.placement);
+          y.rotatedAboutAxis(k, std::cos(q[0]), std::sin(q[0])).transformedBy(joint.placement);
       EXPECT_LT(distance(got, expected), 1e-13) << "axis " << k << ", q " << q[0];
     }
   }
@@ -77,7 +77,7 @@ std::size_t tracedOperations(const Joint& joint, bool constant_composite, bool a
   const VecX<Sym> q = x.segment<1>(10);
   const InertiaSum<Sym> out =
       about_the_axis_first
-          ? rotatedAboutAxis(y, 2, Sym(math::cos(q[0])), Sym(math::sin(q[0]))).transformedBy(asScalar<Sym>(joint.placement))
+          ? y.rotatedAboutAxis(2, Sym(math::cos(q[0])), Sym(math::sin(q[0]))).transformedBy(asScalar<Sym>(joint.placement))
           : y.transformedBy(jointPlacement<Sym>(joint, q));
   VecX<Sym> all(13);
   all << out.h, Eigen::Map<const VecX<Sym>>(out.rotational.data(), 9), out.mass;

@@ -55,16 +55,17 @@ inline bool permutesAxes(const Mat3<double>& R) {
 }
 
 // Joint j's composite inertia in its parent's frame. A revolute joint about a coordinate
-// axis whose placement only permutes axes: about the axis first (rotatedAboutAxis), then
-// by the placement, whose rotation costs nothing traced; otherwise by liMi at once.
+// axis whose placement only permutes axes: turned about the axis first
+// (InertiaSum::rotatedAboutAxis), then moved by the placement, whose rotation costs nothing
+// traced; any other joint: by liMi at once.
 template <class S, class Q>
 InertiaSum<S> compositeInParent(const Model& model, const Data<S>& data, int j, const Eigen::MatrixBase<Q>& q) {
   const Joint& joint = model.joints[j];
   if (joint.type != JointType::Revolute || joint.axis_kind == AxisKind::Unaligned || !permutesAxes(joint.placement.rotation))
     return data.Ycrb[j].transformedBy(data.liMi[j]);
   const S& angle = q[joint.idx_q];
-  const InertiaSum<S> turned = rotatedAboutAxis(data.Ycrb[j], axisIndex(joint.axis_kind), S(math::cos(angle)),
-                                                S(math::sin(angle)));
+  const InertiaSum<S> turned =
+      data.Ycrb[j].rotatedAboutAxis(axisIndex(joint.axis_kind), S(math::cos(angle)), S(math::sin(angle)));
   return turned.transformedBy(asScalar<S>(joint.placement));
 }
 

@@ -64,32 +64,32 @@ template <class S> struct InertiaSum {
       }
     return out;
   }
-};
 
-// A composite inertia rotated about coordinate axis k by the angle whose cosine and sine
-// are c and s (a revolute joint about that axis). The plane block [A D; D B] of the
-// rotational inertia becomes [A c^2 + B s^2 - 2 D cs, (A - B) cs + D (c^2 - s^2); ...,
-// A s^2 + B c^2 + 2 D cs]: the products of c and s depend on the angle alone, so each
-// entry waits on the composite for one multiply-add chain.
-template <class S> InertiaSum<S> rotatedAboutAxis(const InertiaSum<S>& y, int k, const S& c, const S& s) {
-  const int i = (k + 1) % 3, l = (k + 2) % 3;
-  const S cc = c * c, ss = s * s, cs = c * s;
-  const S cs2 = cs + cs, cos2 = cc - ss;
-  const Mat3<S>& I = y.rotational;
-  InertiaSum<S> out;
-  out.mass = y.mass;
-  out.h[k] = y.h[k];
-  out.h[i] = c * y.h[i] - s * y.h[l];
-  out.h[l] = s * y.h[i] + c * y.h[l];
-  Mat3<S>& O = out.rotational;
-  O(i, i) = I(i, i) * cc + I(l, l) * ss - I(i, l) * cs2;
-  O(l, l) = I(i, i) * ss + I(l, l) * cc + I(i, l) * cs2;
-  O(i, l) = O(l, i) = (I(i, i) - I(l, l)) * cs + I(i, l) * cos2;
-  O(i, k) = O(k, i) = c * I(i, k) - s * I(l, k);
-  O(l, k) = O(k, l) = s * I(i, k) + c * I(l, k);
-  O(k, k) = I(k, k);
-  return out;
-}
+  // This inertia turned about coordinate axis k by the angle whose cosine and sine are c
+  // and s (a revolute joint about that axis). The plane block [A D; D B] of the rotational
+  // inertia becomes [A c^2 + B s^2 - 2 D cs, (A - B) cs + D (c^2 - s^2); ...,
+  // A s^2 + B c^2 + 2 D cs]: the products of c and s depend on the angle alone, so each
+  // entry waits on the inertia for one multiply-add chain.
+  InertiaSum rotatedAboutAxis(int k, const S& c, const S& s) const {
+    const int i = (k + 1) % 3, l = (k + 2) % 3;
+    const S cc = c * c, ss = s * s, cs = c * s;
+    const S cs2 = cs + cs, cos2 = cc - ss;
+    const Mat3<S>& I = rotational;
+    InertiaSum out;
+    out.mass = mass;
+    out.h[k] = h[k];
+    out.h[i] = c * h[i] - s * h[l];
+    out.h[l] = s * h[i] + c * h[l];
+    Mat3<S>& O = out.rotational;
+    O(i, i) = I(i, i) * cc + I(l, l) * ss - I(i, l) * cs2;
+    O(l, l) = I(i, i) * ss + I(l, l) * cc + I(i, l) * cs2;
+    O(i, l) = O(l, i) = (I(i, i) - I(l, l)) * cs + I(i, l) * cos2;
+    O(i, k) = O(k, i) = c * I(i, k) - s * I(l, k);
+    O(l, k) = O(k, l) = s * I(i, k) + c * I(l, k);
+    O(k, k) = I(k, k);
+    return out;
+  }
+};
 
 template <class S> struct Data {
   explicit Data(const Model& model)
