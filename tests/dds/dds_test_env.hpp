@@ -4,10 +4,8 @@
 // (support/dds_domain.hpp), so that parallel ctest runs never see each other's servers.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <chrono>
-#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
