@@ -229,6 +229,22 @@ TEST_P(Properties, WorldAlignedFrameJacobianDoesNotDependOnWhereTheBaseStands) {
   }
 }
 
+// A frame's origin summed from its own joint placements (framePosition) is the
+// translation of its world placement, for every frame, also with the base far away.
+TEST_P(Properties, FramePositionIsTheTranslationOfTheFramesPlacement) {
+  Data<double> data(model);
+  for (std::uint64_t seed : {21u, 22u}) {
+    State x = randomState(seed);
+    if (model.root == RootJoint::FreeFlyer && seed == 22u) x.q.head<3>() << 1e3, -2e3, 5e2;
+    forwardKinematics(model, data, x.q);
+    for (int f = 0; f < model.nframes(); ++f) {
+      SCOPED_TRACE("frame " + model.frames[f].name);
+      const Eigen::Vector3d expected = framePlacement(model, data, f).translation;
+      EXPECT_LT((framePosition<double>(model, x.q, f) - expected).norm(), 1e-12 * (1.0 + expected.norm()));
+    }
+  }
+}
+
 // dtau/da is the mass matrix: CRBA against central differences of RNEA. RNEA is affine
 // in a, so a unit step is exact up to rounding (a small one only adds cancellation).
 TEST_P(Properties, MassMatrixIsDerivativeOfRneaInA) {

@@ -198,10 +198,13 @@ MatX<S> primitiveValue(const PrimitiveContext& c, const std::string& name, const
     d(0, 0) = shapeDistance(shapeOf(a), placementOf(m, data, fa), shapeOf(b), placementOf(m, data, fb)).distance;
     return d;
   }
-  // frame_position, frame_rotation, frame_placement.
+  if (name == "frame_position") {
+    const int f = resolveFrameName(m, s[1], 1);
+    return f < 0 ? MatX<S>(MatX<S>::Zero(3, 1)) : MatX<S>(framePosition<S>(m, v[0], f));
+  }
+  // frame_rotation, frame_placement.
   forwardKinematics(m, data, v[0]);
   const SE3<S> oMf = placementOf(m, data, resolveFrameName(m, s[1], 1));
-  if (name == "frame_position") return oMf.translation;
   if (name == "frame_rotation") return oMf.rotation;
   MatX<S> out(3, 4);
   out.template leftCols<3>() = oMf.rotation;

@@ -83,4 +83,15 @@ template <class S> SE3<S> framePlacement(const Model& model, const Data<S>& data
   return frame.parent_joint >= 0 ? data.oMi[frame.parent_joint] * placement : SE3<S>(placement);
 }
 
+// The origin of one frame in the world for configuration q, from its own chain of joint
+// placements alone: u = t_f, then u = liMi_j u from the frame's joint to the root. Each
+// joint turns one vector (4 operations about a coordinate axis) where the world
+// placements would multiply rotations; for the position alone no oMi is needed.
+template <class S, class Q> Vec3<S> framePosition(const Model& model, const Eigen::MatrixBase<Q>& q, int frame_index) {
+  const Frame& frame = model.frames[frame_index];
+  Vec3<S> u = asScalar<S>(frame.placement).translation;
+  for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) u = jointPlacement<S>(model.joints[j], q).act(u);
+  return u;
+}
+
 }  // namespace robodiff
