@@ -474,7 +474,7 @@ std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const Functio
 
 std::uint64_t compactAddressingFrom(std::uint64_t instruction_cache_bytes) {
   if (instruction_cache_bytes == 0) return kCompactAddressingFrom;
-  return kCompactAddressingFrom * instruction_cache_bytes / kCompactAddressingCacheBytes;
+  return static_cast<std::uint64_t>(static_cast<double>(instruction_cache_bytes) / kCodeBytesPerInstruction);
 }
 
 std::uint64_t hostInstructionCacheBytes() {

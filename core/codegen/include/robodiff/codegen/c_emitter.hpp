@@ -32,9 +32,14 @@ inline constexpr std::uint32_t kOutputOrderFrom = 60000;
 // less lane pairs) address their arrays and constants compactly (src/compact_addressing.hpp):
 // their code no longer fits the instruction cache and runs at the speed it streams in.
 // Below, it fits, and the base pointers only take registers (docs/code-generation.md).
-// This is for a 32 KiB instruction cache; compactAddressingFrom() scales it to another.
-inline constexpr std::uint64_t kCompactAddressingFrom = 4500;
+// Each of those takes 7.8 bytes of machine code or so (-march=native: Panda Euler step + J,
+// 64,033 bytes for 8,228; its step + cost + derivatives, 70,833 for 8,989; the
+// free-flying Talos's step + cost value, 63,713 for 8,222), so this is where a 32 KiB
+// instruction cache fills; compactAddressingFrom() scales it to another.
 inline constexpr std::uint64_t kCompactAddressingCacheBytes = 32768;
+inline constexpr double kCodeBytesPerInstruction = 7.8;
+inline constexpr std::uint64_t kCompactAddressingFrom =
+    static_cast<std::uint64_t>(kCompactAddressingCacheBytes / kCodeBytesPerInstruction);
 
 // The threshold for an instruction cache of `bytes` (0: unknown, the 32 KiB one's).
 std::uint64_t compactAddressingFrom(std::uint64_t instruction_cache_bytes);
