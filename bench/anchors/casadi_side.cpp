@@ -6,7 +6,7 @@
 // arg / res / iw / w (sizes from the generated <name>_work).
 //
 // Each library is built in a child process (child_build.hpp): its wall time is the cold
-// build (SX expression + code generation + compile), getrusage(RUSAGE_CHILDREN) there the
+// build (SX expression + code generation + compile), measured_cc's log there the
 // compiler's peak memory; a build over the cap is stopped and reported. Jacobians are in
 // the tangent space, as CppADCodeGen's: q enters as integrate(q, dq), called at dq = 0.
 // The step rows (step_rows.hpp; CodegenOptions::step_rows: fixed base, nq = nv) are the
@@ -101,7 +101,7 @@ void generateAndCompileCasadi(const std::string& row, const casadi_codegen::Tree
   if (!casadi_codegen::generateSource(tree, casadiAlgorithmOf(row), step, casadiRowHasJacobian(row), name.c_str(),
                                       source.c_str(), error, sizeof error))
     throw std::runtime_error(error);
-  runCompiler({"/usr/bin/gcc", "-O3", "-march=native", "-shared", "-fPIC", "-o", name + ".so", source, "-lm"}, source);
+  runCompiler({compilerCommand(), "-O3", "-march=native", "-shared", "-fPIC", "-o", name + ".so", source, "-lm"}, source);
 }
 
 // The generated C entry points (casadi_int is long long int, casadi_real double).

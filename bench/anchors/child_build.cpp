@@ -6,7 +6,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -20,16 +22,31 @@ namespace {
 
 std::string overCapNote(double cap) { return "build > " + std::to_string(static_cast<int>(cap)) + " s"; }
 
+// The largest peak of the compilers measured_cc ran (its log: "<KiB> <output>" lines);
+// 0 when it ran none.
+long largestLoggedPeak(const fs::path& log) {
+  std::ifstream in(log);
+  long largest = 0, kib = 0;
+  std::string output;
+  while (in >> kib && std::getline(in, output)) largest = std::max(largest, kib);
+  return largest;
+}
+
 // In the child: runs `build` in `dir`, records the compiler's peak memory; never returns.
+// Through measured_cc (compilerCommand()), the compilers' own peak from its log; else
+// getrusage's, which also counts this child's size at each fork (measured_cc.cpp).
 [[noreturn]] void runChildBuild(const fs::path& dir, const std::function<void()>& build) {
   setpgid(0, 0);
   int code = 1;
   try {
+    const fs::path log = fs::absolute(dir) / "compiler.log";
+    setenv("ANCHORS_CC_LOG", log.c_str(), 1);
     fs::current_path(dir);
     build();
     rusage ru{};
     getrusage(RUSAGE_CHILDREN, &ru);
-    std::ofstream(dir / "compiler_kib") << ru.ru_maxrss << "\n";
+    const long logged = largestLoggedPeak(log);
+    std::ofstream(dir / "compiler_kib") << (logged > 0 ? logged : ru.ru_maxrss) << "\n";
     code = 0;
   } catch (const std::exception& e) {
     std::ofstream(dir / "error") << e.what() << "\n";
@@ -52,6 +69,11 @@ bool waitWithinCap(pid_t pid, std::chrono::steady_clock::time_point t0, double c
 }
 
 }  // namespace
+
+std::string compilerCommand() {
+  const char* measured = std::getenv("ANCHORS_MEASURED_CC");
+  return measured && *measured ? measured : "/usr/bin/gcc";
+}
 
 void buildInChild(const fs::path& dir, const fs::path& library, double cap_seconds,
                   const std::function<void()>& build, RowResult& r) {

@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -69,15 +70,37 @@ def anchors_round(args, robot, work, round_number):
 
 def robodiff_round(args, robot, specs, work, reuse):
     """robodiff bench: the first round builds cold (its build rows), later ones reuse those
-    libraries; built with "batch": false, single-knot code alone, as the anchors build theirs."""
-    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json", "--no-batch", "--keep",
-           os.path.join(work, "robodiff_bench")]
+    libraries; built with "batch": false, single-knot code alone, as the anchors build theirs.
+    The cold round compiles through measured_cc, as the anchors do: (bench's JSON, each
+    row's largest compiler peak in KiB from measured_cc's log)."""
+    keep = os.path.join(work, "robodiff_bench")
+    cmd = [args.robodiff, "bench", "--urdf", robot.urdf, "--json", "--no-batch", "--keep", keep]
     cmd += ["--reuse"] if reuse else []
     cmd += ["--floating-base"] if robot.floating_base else []
     cmd += ["--quick"] if args.quick else []
     for path in specs:
         cmd += ["--spec", path]
-    return json.loads(run(cmd))
+    log = os.path.join(work, "robodiff_compilers.log")
+    if os.path.exists(log):
+        os.remove(log)
+    env = dict(os.environ, CC=os.environ["ANCHORS_MEASURED_CC"], ANCHORS_CC_LOG=log)
+    return json.loads(run(cmd, env=env)), logged_peaks(log, keep)
+
+
+def logged_peaks(log, keep):
+    """measured_cc's "<KiB> <output>" lines, the largest per folder under `keep` (a row's)."""
+    peaks = {}
+    if not os.path.exists(log):
+        return peaks
+    with open(log) as f:
+        for line in f:
+            kib, _, output = line.rstrip("\n").partition(" ")
+            rel = os.path.relpath(os.path.abspath(output), keep)
+            if rel.startswith(".."):
+                continue  # not a row's (a probe of the compiler)
+            row = rel.split(os.sep)[0]
+            peaks[row] = max(peaks.get(row, 0), int(kib))
+    return peaks
 
 
 def keep_min(slot, us):
@@ -105,7 +128,8 @@ def merge_anchors(result, data):
                     b["note"] = row["note"]
 
 
-def merge_robodiff(result, data):
+def merge_robodiff(result, round_output):
+    data, peaks = round_output
     rows = {r["name"]: r for r in data["rows"]}
     for name, _ in report.ROWS:
         bench_name = step_specs.BENCH_ROWS.get(name, name)  # robodiff bench's name of the row
@@ -116,7 +140,8 @@ def merge_robodiff(result, data):
         if total is not None:
             b = result["builds"].setdefault(name, {}).setdefault("robodiff", {})
             b["seconds"] = min(b.get("seconds", float("inf")), total["seconds"])
-            b["mib"] = min(b.get("mib", float("inf")), mem["bytes"] / 2**20)
+            mib = peaks[bench_name] / 1024 if bench_name in peaks else mem["bytes"] / 2**20
+            b["mib"] = min(b.get("mib", float("inf")), mib)
 
 
 def rel_err(actual, expected):
@@ -242,8 +267,19 @@ def machine():
     return f"{model}, {os.cpu_count()} hardware threads"
 
 
+def use_measured_cc(args):
+    """Both sides' cold builds run the compiler through measured_cc (measured_cc.cpp): its
+    peak memory, not that of the process that started it."""
+    measured = os.path.join(os.path.dirname(os.path.abspath(args.bench)), "measured_cc")
+    if not os.access(measured, os.X_OK):
+        raise SystemExit(f"anchors: {measured} is missing: build anchors_bench's project (bench/anchors/run does)")
+    os.environ["ANCHORS_MEASURED_CC"] = measured
+    os.environ["ANCHORS_REAL_CC"] = shutil.which("gcc") or "/usr/bin/gcc"
+
+
 def main():
     args = parse_args()
+    use_measured_cc(args)
     t0 = time.monotonic()
     selected = robots.resolve([k for k in args.robots.split(",") if k], args.work)
     prepared = [Prepared(args, robot) for robot in selected]

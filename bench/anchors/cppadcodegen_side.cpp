@@ -5,7 +5,7 @@
 // GccCompiler), loaded and called through its GenericModel.
 //
 // Every library is built in a child process of its own (child_build.hpp): its wall time
-// is the cold build (tape + generate + compile), getrusage(RUSAGE_CHILDREN) there gives
+// is the cold build (tape + generate + compile), measured_cc's log there gives
 // the compiler's peak memory, and a build over the cap is killed and reported.
 //
 // Jacobians are w.r.t. [q in the tangent space, v, a or tau], as Pinocchio's analytic
@@ -157,7 +157,7 @@ void generateAndCompile(const std::string& row, const pinocchio::Model& model, c
   }
   CppAD::cg::ModelLibraryCSourceGen<double> library(source);
   CppAD::cg::DynamicModelLibraryProcessor<double> processor(library, "anchor_" + row);
-  CppAD::cg::GccCompiler<double> gcc("/usr/bin/gcc");
+  CppAD::cg::GccCompiler<double> gcc(compilerCommand());
   gcc.setCompileFlags({"-O2", "-march=native"});
   gcc.setCompileLibFlags({"-O2", "-march=native", "-shared", "-rdynamic"});
   processor.createDynamicLibrary(gcc, false);
