@@ -3,13 +3,16 @@
 // their own inputs, as a robot's legs do; the generated code pairs them, computes what
 // the graph computes, in one part or split over several (values crossing parts through
 // the work buffer, a pair's lanes side by side), and a compiler without vector types
-// compiles the same source without pairs. One limb alone gets no pairs.
+// compiles the same source without pairs. One limb alone gets no pairs. One function's
+// lowerings choose its pairs once (LanePairMemo).
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
 
 #include "codegen_fixtures.hpp"
+#include "lane_pairs.hpp"
+#include "lowering.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/codegen/compiler.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
@@ -301,6 +304,50 @@ TEST(LanePairs, OneLimbHasNoTwinAndNoPairs) {
   const GeneratedLibrary lib = generateLibrary(g, {f});
   EXPECT_EQ(lib.functions.at(0).lane_pairs, 0u);
   EXPECT_EQ(sourcesOf(lib).find("rd_pair p"), std::string::npos);
+}
+
+// What a lowering computes, instruction by instruction (kinds, operations, slots, operands).
+std::string loweredText(const detail::LoweredFunction& l) {
+  std::string text;
+  for (const detail::Chunk& c : l.chunks)
+    for (const detail::Instr& i : c.code) {
+      text += std::to_string(static_cast<int>(i.kind)) + ":" + std::to_string(static_cast<int>(i.op)) + ":" +
+              std::to_string(i.dst) + ":" + std::to_string(i.index);
+      for (const detail::Operand& a : i.args)
+        text += "," + std::to_string(static_cast<int>(a.kind)) + ":" + std::to_string(a.slot) + ":" +
+                std::to_string(a.lane) + ":" + std::to_string(a.value);
+      text += ";";
+    }
+  return text;
+}
+
+// The lowering that fills a memo and the one that reuses it lower as one without it; a
+// memo filled by another function's steps is not taken for these.
+TEST(LanePairs, OneFunctionsLoweringsShareItsPairsThroughAMemo) {
+  Graph g;
+  const FunctionDefinition limbs = twoLimbsFunction(g);
+  const std::vector<NodeId> one = limbValues(g, 0);
+  const FunctionDefinition limb{"limb", {{"x", 2 + 2 * kLimbLinks}}, {OutputBlock::dense("e", kLimbLinks, 1, one)}};
+  detail::LoweringOptions options;
+  options.lane_pairs = detail::LanePairMode::Emit;
+  const detail::LoweredFunction alone = detail::lower(g, limbs, options);
+  ASSERT_GT(alone.lane_pairs, 0u);
+
+  detail::LanePairMemo memo;
+  options.lane_pair_memo = &memo;
+  const detail::LoweredFunction filling = detail::lower(g, limbs, options);
+  EXPECT_TRUE(memo.filled);
+  const std::vector<detail::Step> filled_with = memo.steps_in;
+  const detail::LoweredFunction reusing = detail::lower(g, limbs, options);
+  EXPECT_EQ(memo.steps_in, filled_with);
+  EXPECT_EQ(loweredText(filling), loweredText(alone));
+  EXPECT_EQ(loweredText(reusing), loweredText(alone));
+
+  options.lane_pair_memo = nullptr;
+  const detail::LoweredFunction limb_alone = detail::lower(g, limb, options);
+  options.lane_pair_memo = &memo;
+  EXPECT_EQ(loweredText(detail::lower(g, limb, options)), loweredText(limb_alone));
+  EXPECT_NE(memo.steps_in, filled_with);  // refilled with the other function's steps
 }
 
 }  // namespace

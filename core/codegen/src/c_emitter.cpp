@@ -11,6 +11,7 @@
 #include "c_entry_points.hpp"
 #include "c_prologue.hpp"
 #include "compact_addressing.hpp"
+#include "lane_pairs.hpp"
 #include "lowering.hpp"
 
 namespace robodiff::codegen {
@@ -424,7 +425,9 @@ Lowerings lowerForC(const symbolic::Graph& graph, const FunctionDefinition& f, c
   lo.split_threshold = options.split_threshold;
   lo.reuse_slots = options.reuse_temporaries;
   lo.output_order_from = options.output_order_from;
-  lo.ready_first_sums = detail::readyFirstSums(graph, f);
+  detail::LanePairMemo memo;
+  lo.ready_first_sums = detail::readyFirstSums(graph, f, &memo);
+  lo.lane_pair_memo = &memo;
   Lowerings l;
   auto lowerBoth = [&] {
     lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Order : detail::LanePairMode::Off;
@@ -467,7 +470,9 @@ std::uint64_t singleKnotInstructions(const symbolic::Graph& graph, const Functio
   lo.split_threshold = options.split_threshold;
   lo.output_order_from = options.output_order_from;
   lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Emit : detail::LanePairMode::Off;
-  lo.ready_first_sums = detail::readyFirstSums(graph, function);
+  detail::LanePairMemo memo;
+  lo.ready_first_sums = detail::readyFirstSums(graph, function, &memo);
+  lo.lane_pair_memo = &memo;
   const LoweredFunction lowered = detail::lower(graph, function, lo);
   return std::uint64_t{lowered.operations} - lowered.lane_pairs;
 }

@@ -527,9 +527,10 @@ LoweredFunction lower(const Graph& graph, const FunctionDefinition& function, co
   return Lowerer(chained.graph, chained.function, options).run();
 }
 
-bool readyFirstSums(const Graph& graph, const FunctionDefinition& function) {
+bool readyFirstSums(const Graph& graph, const FunctionDefinition& function, LanePairMemo* memo) {
   LoweringOptions paired;
   paired.lane_pairs = LanePairMode::Emit;
+  paired.lane_pair_memo = memo;
   return lower(graph, function, paired).lane_pairs == 0;
 }
 

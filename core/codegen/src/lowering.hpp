@@ -109,6 +109,8 @@ inline constexpr double kLanePairCoverage = 0.3;
 // and Euler step + J, 26-27% in pairs, ran 1.08-1.19x faster with them.
 inline constexpr double kTwinPairCoverage = 0.2;
 
+struct LanePairMemo;  // lane_pairs.hpp
+
 struct LoweringOptions {
   std::uint32_t split_threshold = 0;  // operations per chunk; 0: one chunk
   bool reuse_slots = true;            // false: every value gets a fresh slot (SSA form)
@@ -118,6 +120,7 @@ struct LoweringOptions {
   std::uint32_t output_order_from = kOutputOrderFrom;
   LanePairMode lane_pairs = LanePairMode::Off;
   bool ready_first_sums = false;  // sum chains take their terms in order of readiness (sum_chains.hpp)
+  LanePairMemo* lane_pair_memo = nullptr;  // shared by one function's lowerings; not owned
 };
 
 // Expects a definition that passed validate(graph).
@@ -128,6 +131,6 @@ LoweredFunction lower(const symbolic::Graph& graph, const FunctionDefinition& fu
 // code has no lane pairs (a serial robot's). Reordered chains cost a twin-limbed robot's
 // functions a share of their lane pairs (the free-flying Talos's RNEA + J all of them).
 // The C code and the interpreter both ask, so they compute the same chains.
-bool readyFirstSums(const symbolic::Graph& graph, const FunctionDefinition& function);
+bool readyFirstSums(const symbolic::Graph& graph, const FunctionDefinition& function, LanePairMemo* memo = nullptr);
 
 }  // namespace robodiff::codegen::detail

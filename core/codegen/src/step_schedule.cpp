@@ -121,7 +121,15 @@ class Scheduler {
   // that the code without pairs has the same parts and work buffer as the code with them.
   void pairSteps() {
     const double coverage = f_.lane_pairs == LanePairSeeds::Twins ? kTwinPairCoverage : kLanePairCoverage;
-    out_.pairs = scheduleLanePairs(g_, f_, coverage, kLanePairsBelow, out_.steps);
+    LanePairMemo* memo = options_.lane_pair_memo;
+    if (memo && memo->filled && memo->steps_in == out_.steps) {
+      out_.steps = memo->steps_out;
+      out_.pairs = memo->pairs;
+    } else {
+      std::vector<Step> steps_in = memo ? out_.steps : std::vector<Step>();
+      out_.pairs = scheduleLanePairs(g_, f_, coverage, kLanePairsBelow, out_.steps);
+      if (memo) *memo = LanePairMemo{std::move(steps_in), out_.steps, out_.pairs, true};
+    }
     if (out_.pairs.count() == 0) return;
     out_.twin.assign(n_, kNoPair);
     for (const Step& s : out_.steps)
