@@ -14,12 +14,12 @@
 namespace robodiff::symbolic {
 namespace {
 
+// A generated arm of seven revolute joints about unaligned axes.
 Model sevenJointArm() {
-  GeneratorOptions options;
-  options.kind = RobotKind::Chain;
-  options.joints = 7;
-  options.seed = 4;
-  return loadUrdfString(generateRobotUrdf(options));
+  GeneratorOptions arm;  // a chain
+  arm.joints = 7;
+  arm.seed = 4;
+  return loadUrdfString(generateRobotUrdf(arm));
 }
 
 struct Traced {
