@@ -322,7 +322,7 @@ std::string loweredText(const detail::LoweredFunction& l) {
 }
 
 // The lowering that fills a memo and the one that reuses it lower as one without it; a
-// memo filled by another function's steps is not taken for these.
+// memo filled from sums chained otherwise, or by another function's steps, is not taken.
 TEST(LanePairs, OneFunctionsLoweringsShareItsPairsThroughAMemo) {
   Graph g;
   const FunctionDefinition limbs = twoLimbsFunction(g);
@@ -342,6 +342,15 @@ TEST(LanePairs, OneFunctionsLoweringsShareItsPairsThroughAMemo) {
   EXPECT_EQ(memo.steps_in, filled_with);
   EXPECT_EQ(loweredText(filling), loweredText(alone));
   EXPECT_EQ(loweredText(reusing), loweredText(alone));
+
+  // Sums chained in order of readiness make another graph: paired afresh.
+  options.ready_first_sums = true;
+  options.lane_pair_memo = nullptr;
+  const detail::LoweredFunction ready_first_alone = detail::lower(g, limbs, options);
+  options.lane_pair_memo = &memo;
+  EXPECT_EQ(loweredText(detail::lower(g, limbs, options)), loweredText(ready_first_alone));
+  EXPECT_TRUE(memo.ready_first_sums);
+  options.ready_first_sums = false;
 
   options.lane_pair_memo = nullptr;
   const detail::LoweredFunction limb_alone = detail::lower(g, limb, options);

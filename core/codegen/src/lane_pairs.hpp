@@ -75,11 +75,16 @@ LanePairs scheduleLanePairs(const symbolic::Graph& graph, const FunctionDefiniti
 
 // scheduleLanePairs' outcome for one function's steps, kept so that the lowerings of one
 // function (readyFirstSums, then its code with and without pairs) choose its pairs once:
-// the same steps in give the same pairs and order out. Other steps are paired afresh.
-// The Talos Euler step value's pairs took 70 ms a lowering, three lowerings a build.
+// the same steps of the same graph in give the same pairs and order out. The graph a
+// lowering pairs is the function's with its sums chained (sum_chains.hpp), which the
+// order of the chains' terms changes: a lowering of other steps, or of sums chained
+// otherwise, pairs afresh. The Talos Euler step value's pairs took 70 ms a lowering,
+// three lowerings a build.
 struct LanePairMemo {
   std::vector<Step> steps_in, steps_out;
   LanePairs pairs{0};
+  bool ready_first_sums = false;  // how the graph's sums were chained
+  std::size_t graph_size = 0;
   bool filled = false;
 };
 

@@ -122,13 +122,14 @@ class Scheduler {
   void pairSteps() {
     const double coverage = f_.lane_pairs == LanePairSeeds::Twins ? kTwinPairCoverage : kLanePairCoverage;
     LanePairMemo* memo = options_.lane_pair_memo;
-    if (memo && memo->filled && memo->steps_in == out_.steps) {
+    if (memo && memo->filled && memo->ready_first_sums == options_.ready_first_sums && memo->graph_size == g_.size() &&
+        memo->steps_in == out_.steps) {
       out_.steps = memo->steps_out;
       out_.pairs = memo->pairs;
     } else {
       std::vector<Step> steps_in = memo ? out_.steps : std::vector<Step>();
       out_.pairs = scheduleLanePairs(g_, f_, coverage, kLanePairsBelow, out_.steps);
-      if (memo) *memo = LanePairMemo{std::move(steps_in), out_.steps, out_.pairs, true};
+      if (memo) *memo = LanePairMemo{std::move(steps_in), out_.steps, out_.pairs, options_.ready_first_sums, g_.size(), true};
     }
     if (out_.pairs.count() == 0) return;
     out_.twin.assign(n_, kNoPair);
