@@ -3,16 +3,16 @@
 // interpreter (1e-12), the double reference (values; Jacobians and Hessians against
 // central differences) and Pinocchio's golden derivatives; sparse blocks hold the dense
 // entries; the batched entry point equals the single one bit for bit; split libraries
-// equal unsplit ones; failures (node limit, compiler, spec) are the documented errors
-// and leave no library behind; the description JSON agrees with the library's own
-// descriptor.
+// equal unsplit ones. Failures: library_errors_test.cpp; the description JSON:
+// library_description_test.cpp.
 //
 // Compile time, not run time, is what this file spends (gcc at O1 takes ~10 s per 15k
 // operations, at O0 ~1 s): libraries are compiled at O0, except small ones at O1, where
 // gcc with -march=native contracts a*b + c into FMAs, so that the interpreter and the
 // batched entry point are also checked against optimised code; the largest (talos with
 // a free-flyer, 225k operations) with tcc when it is installed. Each library lives in a
-// temporary directory removed at exit; those used by several tests are built once.
+// temporary directory removed at exit; those used by several tests are built once
+// (compiled_examples.hpp).
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -21,27 +21,23 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <limits>
-#include <map>
 #include <memory>
 #include <optional>
 
 #include <Eigen/LU>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
+#include "compiled_examples.hpp"
 #include "robodiff/codegen/interpreter.hpp"
 #include "robodiff/codegen/loaded_library.hpp"
 #include "robodiff/functions/evaluation.hpp"
 #include "robodiff/functions/function_library.hpp"
 #include "robodiff/functions/model_function.hpp"
 #include "robodiff/functions/reference.hpp"
-#include "robodiff/model/canonical.hpp"
 #include "robodiff/model/urdf_loader.hpp"
-#include "robodiff/symbolic/graph.hpp"
 #include "support/golden.hpp"
 #include "support/temp_dir.hpp"
 #include "support/test_paths.hpp"
@@ -50,59 +46,15 @@ namespace robodiff {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
+using testing::cached;
+using testing::Compiled;
+using testing::compile;
+using testing::exampleSpec;
+using testing::libraryArm7;
 using testing::matricesAgree;
+using testing::quadruped;
+using testing::robot;
 using testing::TempDir;
-
-const Model& libraryArm7() {
-  static const Model m = loadUrdfFile((testing::sourceDir() / "examples/robots/arm7.urdf").string());
-  return m;
-}
-
-const Model& quadruped() {
-  static const Model m =
-      loadUrdfFile((testing::sourceDir() / "examples/robots/quadruped.urdf").string(), RootJoint::FreeFlyer);
-  return m;
-}
-
-const Model& robot(const std::string& name) { return name == "arm7" ? libraryArm7() : quadruped(); }
-
-// An example spec (examples/specs/NAME.json), to be compiled at `optimization`.
-FunctionSpec exampleSpec(const std::string& name, const std::string& optimization = "O0") {
-  FunctionSpec spec = loadFunctionSpec((testing::sourceDir() / "examples/specs" / (name + ".json")).string());
-  spec.build.optimization = optimization;
-  return spec;
-}
-
-// A generated, compiled and loaded function. The directory outlives the library.
-struct Compiled {
-  TempDir dir;
-  FunctionSpec spec;
-  GeneratedFunctionLibrary generated;
-  std::unique_ptr<codegen::LoadedLibrary> library;
-  std::optional<codegen::CompiledFunction> function;
-
-  const BuiltFunction& built() const { return generated.built; }
-  const codegen::FunctionDefinition& definition() const { return generated.built.definition; }
-};
-
-std::unique_ptr<Compiled> compile(const Model& model, const FunctionSpec& spec, const LibraryOptions& options = {}) {
-  auto c = std::make_unique<Compiled>();
-  c->spec = spec;
-  c->generated = generateFunctionLibrary(model, spec, c->dir.path() / "out", options);
-  c->library = std::make_unique<codegen::LoadedLibrary>(codegen::LoadedLibrary::open(c->generated.library));
-  c->function.emplace(c->library->function(c->definition().name));
-  return c;
-}
-
-// Built once per (robot, spec, optimisation) with the default options and shared by the tests.
-const Compiled& cached(const std::string& robot_name, const std::string& spec_name,
-                       const std::string& optimization = "O0") {
-  static std::map<std::string, std::unique_ptr<Compiled>> cache;
-  std::unique_ptr<Compiled>& slot = cache[robot_name + "/" + spec_name + "/" + optimization];
-  if (!slot) slot = compile(robot(robot_name), exampleSpec(spec_name, optimization));
-  return *slot;
-}
 
 // A program found in PATH, or nothing.
 std::optional<fs::path> findInPath(const std::string& program) {
@@ -435,207 +387,6 @@ TEST(LanePairs, TheQuadrupedsMassMatrixIsPairedAndItsJacobianSeededAtTwinsOnly) 
     EXPECT_TRUE(matricesAgree(value, expected, 1e-12)) << "seed " << seed;
   }
   EXPECT_EQ(cached("quadruped", "rnea_jacobian").definition().lane_pairs, codegen::LanePairSeeds::Twins);
-}
-
-// ---------------------------------------------------------------------------------------
-// 6. Errors: each is the documented exception, and no library is left behind.
-
-// Nothing at `out_dir` except, possibly, an empty directory or sources.
-void expectNoLibrary(const fs::path& out_dir, const std::string& name) {
-  EXPECT_FALSE(fs::exists(out_dir / (name + ".so"))) << out_dir / (name + ".so");
-  EXPECT_FALSE(fs::exists(out_dir / (name + ".json"))) << out_dir / (name + ".json");
-}
-
-TEST(LibraryErrors, TheNodeLimitIsAResourceErrorAndNothingIsWritten) {
-  TempDir dir;
-  const fs::path out = dir.path() / "out";
-  LibraryOptions options;
-  options.builder.node_limit = 2000;
-  try {
-    generateFunctionLibrary(quadruped(), exampleSpec("aba_jacobian"), out, options);
-    FAIL() << "no error";
-  } catch (const symbolic::GraphTooLarge& e) {
-    EXPECT_EQ(e.limit(), 2000u);
-    EXPECT_NE(std::string(e.what()).find("2000"), std::string::npos) << e.what();
-  }
-  expectNoLibrary(out, "aba");
-  EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << "the build failed before anything was emitted";
-}
-
-TEST(LibraryErrors, AFailingCompilerIsACompileErrorWithItsMessage) {
-  TempDir dir;
-  const fs::path cc = dir.path() / "fake-cc";
-  std::ofstream(cc) << "#!/bin/sh\necho 'fake compiler failure: boom' >&2\nexit 1\n";
-  fs::permissions(cc, fs::perms::owner_all);
-  const fs::path out = dir.path() / "out";
-  LibraryOptions options;
-  options.compiler.compiler = cc.string();
-  try {
-    generateFunctionLibrary(libraryArm7(), exampleSpec("crba"), out, options);
-    FAIL() << "no error";
-  } catch (const codegen::CompileError& e) {
-    EXPECT_EQ(e.kind(), codegen::CompileError::Kind::CompilerFailed);
-    const std::string what = e.what();
-    EXPECT_TRUE(what.find("fake compiler failure: boom") != std::string::npos ||
-                e.compilerOutput().find("fake compiler failure: boom") != std::string::npos)
-        << what << "\n--- compiler output:\n"
-        << e.compilerOutput();
-  }
-  expectNoLibrary(out, "crba");
-}
-
-TEST(LibraryErrors, SpecsThatDoNotFitTheModelAreSpecErrors) {
-  TempDir dir;
-  {
-    SCOPED_TRACE("fixed inputs of the wrong size");
-    // gravity_compensation fixes v and a to 7 zeros: a 7-joint arm, not the quadruped (nv 18).
-    const fs::path out = dir.path() / "fixed";
-    try {
-      generateFunctionLibrary(quadruped(), exampleSpec("gravity_compensation"), out);
-      FAIL() << "no error";
-    } catch (const SpecError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find("inputs.v.fixed"), std::string::npos) << what;
-      EXPECT_NE(what.find("18"), std::string::npos) << what;
-    }
-    expectNoLibrary(out, "rnea");
-  }
-  {
-    SCOPED_TRACE("unknown frame");
-    FunctionSpec spec = exampleSpec("fk");
-    spec.frame = "no_such_frame";
-    const fs::path out = dir.path() / "frame";
-    try {
-      generateFunctionLibrary(libraryArm7(), spec, out);
-      FAIL() << "no error";
-    } catch (const SpecError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find("no_such_frame"), std::string::npos) << what;
-      EXPECT_NE(what.find("tool"), std::string::npos) << "lists the frames there are: " << what;
-    }
-    expectNoLibrary(out, "fk");
-  }
-}
-
-// ---------------------------------------------------------------------------------------
-// 7. The description JSON agrees with the definition and the library's descriptor.
-
-std::vector<std::uint32_t> array(const std::uint32_t* p, std::size_t n) {
-  return p ? std::vector<std::uint32_t>(p, p + n) : std::vector<std::uint32_t>{};
-}
-
-void checkDescription(const Model& model, const Compiled& c) {
-  const codegen::FunctionDefinition& def = c.definition();
-  const BuiltFunction& built = c.built();
-  const robodiff_function_desc& desc = c.function->descriptor();
-  ASSERT_EQ(c.generated.description, c.dir.path() / "out" / (def.name + ".json"));
-  ASSERT_TRUE(fs::exists(c.generated.description));
-  const json d = json::parse(testing::readFile(c.generated.description));
-
-  EXPECT_EQ(d.at("name"), def.name);
-  EXPECT_EQ(std::string(desc.name), def.name);
-  EXPECT_EQ(d.at("model").at("name"), model.name);
-  EXPECT_EQ(d.at("model").at("nq"), model.nq);
-  EXPECT_EQ(d.at("model").at("nv"), model.nv);
-  EXPECT_EQ(d.at("model").at("hash"), canonicalHash(model));
-  EXPECT_EQ(d.at("model").at("hash").get<std::string>().size(), 64u) << "SHA-256 in hex";
-  EXPECT_EQ(d.at("spec"), json::parse(normalizedSpecJson(c.spec)));
-
-  const json& inputs = d.at("inputs");
-  ASSERT_EQ(inputs.size(), def.inputs.size());
-  ASSERT_EQ(desc.n_inputs, def.inputs.size());
-  for (std::size_t b = 0; b < def.inputs.size(); ++b) {
-    SCOPED_TRACE("input " + def.inputs[b].name);
-    EXPECT_EQ(inputs[b].at("name"), def.inputs[b].name);
-    EXPECT_EQ(inputs[b].at("size"), def.inputs[b].size);
-    EXPECT_EQ(std::string(desc.inputs[b].name), def.inputs[b].name);
-    EXPECT_EQ(desc.inputs[b].size, def.inputs[b].size);
-  }
-  // The runtime inputs: q (nq), v, a (nv), and weights (nv) when the Hessian takes them.
-  EXPECT_EQ(def.inputs.at(0).name, "q");
-  EXPECT_EQ(def.inputs.at(0).size, static_cast<std::uint32_t>(model.nq));
-
-  const json& outputs = d.at("outputs");
-  ASSERT_EQ(outputs.size(), def.outputs.size());
-  ASSERT_EQ(desc.n_outputs, def.outputs.size());
-  for (std::size_t k = 0; k < def.outputs.size(); ++k) {
-    const codegen::OutputBlock& block = def.outputs[k];
-    const BuiltOutput& b = built.outputs[k];
-    const robodiff_output_desc& o = desc.outputs[k];
-    const json& j = outputs[k];
-    SCOPED_TRACE("output " + block.name);
-    EXPECT_EQ(j.at("name"), block.name);
-    EXPECT_EQ(std::string(o.name), block.name);
-    EXPECT_EQ(j.at("kind"), toString(b.kind));
-    EXPECT_EQ(j.at("rows"), block.rows);
-    EXPECT_EQ(j.at("cols"), block.cols);
-    EXPECT_EQ(j.at("nnz"), block.size());
-    EXPECT_EQ(o.rows, block.rows);
-    EXPECT_EQ(o.cols, block.cols);
-    EXPECT_EQ(o.nnz, block.size());
-    EXPECT_EQ(b.nnz, block.size());
-    if (b.kind != OutputKind::Value) {
-      EXPECT_EQ(j.at("wrt"), b.wrt);
-    }
-    if (block.kind == codegen::OutputKind::Sparse) {
-      EXPECT_EQ(j.at("layout"), "sparse");
-      EXPECT_EQ(o.kind, ROBODIFF_OUTPUT_SPARSE);
-      const std::vector<std::uint32_t> row_ptr = array(o.row_ptr, o.rows + 1), col_idx = array(o.col_idx, o.nnz);
-      EXPECT_EQ(j.at("row_ptr").get<std::vector<std::uint32_t>>(), row_ptr);
-      EXPECT_EQ(j.at("col_idx").get<std::vector<std::uint32_t>>(), col_idx);
-      EXPECT_EQ(row_ptr, block.row_ptr);
-      EXPECT_EQ(col_idx, block.col_idx);
-      EXPECT_EQ(row_ptr.back(), o.nnz);
-      if (b.kind == OutputKind::Hessian) {
-        EXPECT_EQ(j.at("triangle"), "lower triangle");
-      }
-    } else {
-      EXPECT_EQ(j.at("layout"), "dense");
-      EXPECT_EQ(o.kind, ROBODIFF_OUTPUT_DENSE);
-      EXPECT_EQ(o.row_ptr, nullptr);
-      EXPECT_EQ(o.col_idx, nullptr);
-      EXPECT_EQ(o.nnz, o.rows * o.cols);
-      EXPECT_FALSE(j.contains("row_ptr"));
-      EXPECT_FALSE(j.contains("col_idx"));
-      if (b.kind == OutputKind::Hessian) {
-        EXPECT_EQ(j.at("triangle"), "full symmetric matrix");
-      }
-    }
-  }
-
-  const json& build = d.at("build");
-  for (const char* seconds : {"trace_seconds", "differentiate_seconds", "assemble_seconds", "emit_seconds"}) {
-    ASSERT_TRUE(build.at(seconds).is_number()) << seconds;
-    EXPECT_GE(build.at(seconds).get<double>(), 0.0) << seconds;
-  }
-  EXPECT_GT(build.at("trace_seconds").get<double>(), 0.0);
-  EXPECT_GT(build.at("compile_seconds").get<double>(), 0.0);
-  EXPECT_DOUBLE_EQ(build.at("compile_seconds").get<double>(), c.generated.compile.seconds);
-  EXPECT_EQ(build.at("operations"), c.generated.info.operations);
-  EXPECT_GT(build.at("operations").get<std::uint32_t>(), 0u);
-  EXPECT_EQ(build.at("parts"), c.generated.info.parts);
-  EXPECT_EQ(build.at("trace_nodes"), built.trace_nodes);
-  EXPECT_EQ(build.at("function_nodes"), built.graph->size());
-  EXPECT_EQ(build.at("library"), c.generated.library.filename().string());
-  EXPECT_EQ(build.at("library_bytes"), fs::file_size(c.generated.library));
-  EXPECT_EQ(build.at("flags"), c.generated.compile.flags);
-  EXPECT_NE(std::find(c.generated.compile.flags.begin(), c.generated.compile.flags.end(),
-                      "-" + c.spec.build.optimization),
-            c.generated.compile.flags.end())
-      << "the spec's build.optimization reaches the compiler";
-  EXPECT_EQ(d.at("method"), built.method);
-}
-
-TEST(LibraryDescription, SparseJacobianDescriptionAgreesWithTheDescriptor) {
-  checkDescription(quadruped(), cached("quadruped", "rnea_jacobian_sparse"));
-}
-
-TEST(LibraryDescription, SparseHessianDescriptionAgreesWithTheDescriptor) {
-  checkDescription(quadruped(), cached("quadruped", "rnea_hessian_sparse"));
-}
-
-TEST(LibraryDescription, DenseDescriptionAgreesWithTheDescriptor) {
-  checkDescription(libraryArm7(), cached("arm7", "rnea_hessian"));
 }
 
 }  // namespace
