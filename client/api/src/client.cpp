@@ -83,6 +83,113 @@ ModelInfo Client::loadModelFile(const std::filesystem::path& urdf_path, bool flo
   return loadModel(text.str(), floating_base);
 }
 
+namespace {
+
+// The function's layout from the server, which builds it first (GetFunction with wait).
+// False without a server answer where the local cache may serve instead; throws where
+// it may not.
+bool layoutFromServer(Client::Impl& c, Function::Impl& f) {
+  if (!c.connection || (c.localCapable() && !c.serverPresent())) {
+    if (!c.localCapable()) throw ClientError(c.noServer());
+    return false;
+  }
+  rpc::GetFunctionRequest request;
+  request.model_id = f.model_id;
+  request.spec_json = f.spec_json;
+  request.wait = true;
+  rpc::GetFunctionReply reply;
+  const std::uint64_t generation = c.generation.load();
+  Status s = c.connection->getFunction(request, reply, c.callOptions());
+  if (s.code == StatusCode::NotFound) {  // a new server that does not know our model yet
+    if (Status r = c.reregister(generation); r.ok()) s = c.connection->getFunction(request, reply, c.callOptions());
+  }
+  if (s.ok() && reply.state != rpc::FunctionState::Ready)
+    s = {StatusCode::Internal, "GetFunction(wait) answered OK in state " + std::string(rpc::toString(reply.state))};
+  if (s.ok()) {
+    f.id = reply.function_id;
+    f.layout = std::move(reply);
+    return true;
+  }
+  if (s.code != StatusCode::Unavailable || !c.localCapable()) throw ClientError(s);
+  return false;
+}
+
+// The keys the server builds under (cache::prepareBuild with function name "" and the
+// default compiler), computed from the model parsed and hashed here. Returns why they
+// could not be, or "".
+std::string computeLocalKeys(Client::Impl& c, Function::Impl& f, const ModelInfo& model) {
+  try {
+    f.portable_keys = cache::portableKeysFor(model.id, f.spec, "");  // needs no compiler
+    f.key = cache::prepareBuild(*c.localModel(model.id), model.id, f.spec, "", "").key;
+  } catch (const ClientError&) {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Without a server: the local cache must have the function's library.
+void layoutFromCache(Client::Impl& c, Function::Impl& f, const ModelInfo& model, bool local, const std::string& problem) {
+  if (!local)
+    throw ClientError({StatusCode::FailedPrecondition,
+                       "function " + f.spec_json.substr(0, 200) + " on model " + model.id + " is not in the local cache " +
+                           c.cache->dir().string() + (problem.empty() ? "" : " (" + problem + ")") +
+                           " and no robodiffd answers: run `robodiff warmup` for it, or start robodiffd"});
+  f.layout = f.local.load()->layout();
+  f.id = sha256Hex(model.id + "\n" + normalizedSpecJson(f.spec)).substr(0, 32);
+  f.layout.function_id = f.id;
+}
+
+// With a server whose library is not in the cache (yet): the server compiles it, or our
+// copy was refused. Evaluation goes through the server meanwhile (mode auto), and the
+// calling thread looks at the cache again later.
+void laterFromCache(Client::Impl& c, Function::Impl& f, std::string problem) {
+  const std::optional<rpc::FunctionSummary> summary = c.summary(f.id);
+  const bool server_compiled = summary && summary->compiled;
+  bool local = false;
+  if (server_compiled && problem.empty()) {  // compiled between our look and its answer?
+    std::lock_guard lock(f.switch_mutex);
+    local = f.tryLoadLocal(&problem);
+  }
+  if (local) return;
+  if (c.requested == Mode::Local && (server_compiled || !problem.empty()))
+    throw ClientError({StatusCode::FailedPrecondition,
+                       "mode local: function " + f.id + ": the server compiled it but its library in " +
+                           c.cache->dir().string() + " cannot be used here" +
+                           (problem.empty() ? std::string(" (missing, or refused: a library whose SHA-256 "
+                                                          "does not match the index is quarantined)")
+                                            : " (" + problem + ")") +
+                           "; use mode auto to evaluate through the server"});
+  f.local_candidate = problem.empty();
+  f.next_check_ns.store(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count() +
+      100'000'000);
+}
+
+// The function's library from the local cache where this client can load one: now,
+// or (with a server) once the cache has it.
+void resolveLocally(Client::Impl& c, Function::Impl& f, const ModelInfo& model, bool from_server) {
+  const std::string key_problem = computeLocalKeys(c, f, model);
+  const bool have_keys = !f.key.empty() || !f.portable_keys.empty();
+  std::string problem = key_problem;
+  bool local = false;
+  if (have_keys) {
+    std::lock_guard lock(f.switch_mutex);
+    local = f.tryLoadLocal(&problem);
+  }
+  if (!from_server) {
+    layoutFromCache(c, f, model, local, problem);
+  } else if (!local && have_keys) {
+    laterFromCache(c, f, problem);
+  } else if (c.requested == Mode::Local && !have_keys) {
+    throw ClientError({StatusCode::FailedPrecondition,
+                       "mode local: the cache key of function " + f.id + " cannot be computed here: " + key_problem});
+  }
+}
+
+}  // namespace
+
 Function Client::function(const ModelInfo& model, const std::string& spec_json) {
   Impl& c = *impl_;
   if (!c.knowsModel(model.id))
@@ -99,89 +206,11 @@ Function Client::function(const ModelInfo& model, const std::string& spec_json) 
   } catch (const std::exception& e) {
     spec_problem = e.what();
   }
-
-  bool from_server = false;
-  if (c.connection && (!c.localCapable() || c.serverPresent())) {
-    rpc::GetFunctionRequest request;
-    request.model_id = model.id;
-    request.spec_json = spec_json;
-    request.wait = true;
-    rpc::GetFunctionReply reply;
-    const std::uint64_t generation = c.generation.load();
-    Status s = c.connection->getFunction(request, reply, c.callOptions());
-    if (s.code == StatusCode::NotFound) {  // a new server that does not know our model yet
-      if (Status r = c.reregister(generation); r.ok()) s = c.connection->getFunction(request, reply, c.callOptions());
-    }
-    if (s.ok() && reply.state != rpc::FunctionState::Ready)
-      s = {StatusCode::Internal, "GetFunction(wait) answered OK in state " + std::string(rpc::toString(reply.state))};
-    if (s.ok()) {
-      f->id = reply.function_id;
-      f->layout = std::move(reply);
-      from_server = true;
-    } else if (s.code != StatusCode::Unavailable || !c.localCapable()) {
-      throw ClientError(s);
-    }
-  } else if (!c.localCapable()) {
-    throw ClientError(c.noServer());
-  }
-  if (!spec_parsed) {
+  const bool from_server = layoutFromServer(c, *f);
+  if (!spec_parsed) {  // the server may know a spec this client cannot parse
     if (!from_server) throw ClientError({StatusCode::InvalidArgument, spec_problem});
   } else if (c.localCapable()) {
-    // The key the server builds under (cache::prepareBuild with function name "" and
-    // the default compiler), computed from the model parsed and hashed here.
-    std::string key_problem;
-    try {
-      f->portable_keys = cache::portableKeysFor(model.id, f->spec, "");  // needs no compiler
-      f->key = cache::prepareBuild(*c.localModel(model.id), model.id, f->spec, "", "").key;
-    } catch (const ClientError&) {
-      throw;
-    } catch (const std::exception& e) {
-      key_problem = e.what();
-    }
-    std::string problem = key_problem;
-    bool local = false;
-    if (!f->key.empty() || !f->portable_keys.empty()) {
-      std::lock_guard lock(f->switch_mutex);
-      local = f->tryLoadLocal(&problem);
-    }
-    if (!from_server) {
-      if (!local)
-        throw ClientError({StatusCode::FailedPrecondition,
-                           "function " + spec_json.substr(0, 200) + " on model " + model.id +
-                               " is not in the local cache " + c.cache->dir().string() +
-                               (problem.empty() ? "" : " (" + problem + ")") +
-                               " and no robodiffd answers: run `robodiff warmup` for it, or start robodiffd"});
-      f->layout = f->local.load()->layout();
-      f->id = sha256Hex(model.id + "\n" + normalizedSpecJson(f->spec)).substr(0, 32);
-      f->layout.function_id = f->id;
-    } else if (!local && (!f->key.empty() || !f->portable_keys.empty())) {
-      // Not in the cache (yet): the server compiles it, or our copy was refused.
-      const std::optional<rpc::FunctionSummary> summary = c.summary(f->id);
-      const bool server_compiled = summary && summary->compiled;
-      if (server_compiled && problem.empty()) {  // compiled between our look and its answer?
-        std::lock_guard lock(f->switch_mutex);
-        local = f->tryLoadLocal(&problem);
-      }
-      if (!local) {
-        if (c.requested == Mode::Local && (server_compiled || !problem.empty()))
-          throw ClientError({StatusCode::FailedPrecondition,
-                             "mode local: function " + f->id + ": the server compiled it but its library in " +
-                                 c.cache->dir().string() + " cannot be used here" +
-                                 (problem.empty() ? std::string(" (missing, or refused: a library whose SHA-256 "
-                                                                "does not match the index is quarantined)")
-                                                  : " (" + problem + ")") +
-                                 "; use mode auto to evaluate through the server"});
-        // Through the server for now; the cache is looked at again from the calling thread.
-        f->local_candidate = problem.empty();
-        f->next_check_ns.store(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                   std::chrono::steady_clock::now().time_since_epoch())
-                                   .count() +
-                               100'000'000);
-      }
-    } else if (c.requested == Mode::Local && f->key.empty() && f->portable_keys.empty()) {
-      throw ClientError({StatusCode::FailedPrecondition,
-                         "mode local: the cache key of function " + f->id + " cannot be computed here: " + key_problem});
-    }
+    resolveLocally(c, *f, model, from_server);
   }
   f->blocks = runtime::FunctionLayout::fromReply(f->layout);
   for (const rpc::OutputBlock& b : f->layout.outputs) {
