@@ -60,8 +60,6 @@ int lockPin(const fs::path& object_dir, int operation) {
   return fd;
 }
 
-std::string shortKey(const std::string& key) { return key.substr(0, 12); }
-
 // Binds the six text fields of EntryInfo, in their column order, from `first` on.
 Statement& bindInfo(Statement& st, int first, const EntryInfo& info) {
   return st.bind(first, info.model_hash)
@@ -102,6 +100,33 @@ void detail::recordPortableKey(sqlite3* db, const std::string& key, const EntryI
   Statement(db, "UPDATE entries SET portable_key = ? WHERE key = ?").bind(1, info.portable_key).bind(2, key).run();
 }
 
+void detail::indexReadyRow(Cache::State& s, const Entry& e, ExistingRow existing) {
+  const std::string sql =
+      std::string("INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, "
+                  "library_bytes, total_bytes, library_sha256, created, last_used, hits, owner, lease_expires_ms) "
+                  "VALUES (?, 'ready', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, '', 0) ON CONFLICT (key) ") +
+      (existing == ExistingRow::Keep
+           ? "DO NOTHING"
+           : "DO UPDATE SET state = 'ready', model_hash = excluded.model_hash, robot = excluded.robot, "
+             "function = excluded.function, spec = excluded.spec, sizes = excluded.sizes, "
+             "compiler = excluded.compiler, build_seconds = excluded.build_seconds, "
+             "library_bytes = excluded.library_bytes, total_bytes = excluded.total_bytes, "
+             "library_sha256 = excluded.library_sha256, created = excluded.created, "
+             "last_used = excluded.last_used, hits = 0, owner = '', lease_expires_ms = 0");
+  s.db->immediate([&] {
+    Statement insert(s.db->handle(), sql.c_str());
+    bindInfo(insert.bind(1, e.key), 2, e.info)
+        .bind(8, e.info.build_seconds)
+        .bind(9, static_cast<std::int64_t>(e.library_bytes))
+        .bind(10, static_cast<std::int64_t>(e.total_bytes))
+        .bind(11, e.library_sha256)
+        .bind(12, e.created)
+        .bind(13, e.last_used)
+        .run();
+    recordPortableKey(s.db->handle(), e.key, e.info);
+  });
+}
+
 void detail::quarantineEntry(Cache::State& s, const std::string& key, const std::string& reason) {
   s.db->immediate([&] { Statement(s.db->handle(), "DELETE FROM entries WHERE key = ? AND state = 'ready'").bind(1, key).run(); });
   const fs::path from = s.objectDir(key);
@@ -122,41 +147,6 @@ void detail::quarantineEntry(Cache::State& s, const std::string& key, const std:
   std::cerr << "robodiff cache: entry " << key << ": " << reason << "; "
             << (ec ? "could not move it aside (" + ec.message() + "), " : "moved to " + to.string() + "; ")
             << "it will be rebuilt when next needed\n";
-}
-
-std::string detail::artifactProblem(const Entry& e, const fs::path& dir) {
-  std::error_code ec;
-  const fs::path library = dir / "library.so";
-  if (!fs::is_directory(dir, ec)) return "its directory " + dir.string() + " is missing";
-  if (fs::is_symlink(library, ec)) return "library.so is a symbolic link (replaced)";
-  if (!fs::is_regular_file(library, ec)) return "library.so is missing";
-  if (!fs::is_regular_file(dir / "description.json", ec)) return "description.json is missing";
-  const std::uint64_t size = fs::file_size(library, ec);
-  if (ec) return "library.so cannot be read: " + ec.message();
-  if (size != e.library_bytes)
-    return "library.so has " + std::to_string(size) + " bytes, the index recorded " + std::to_string(e.library_bytes) +
-           " (truncated or replaced)";
-  std::string actual;
-  try {
-    actual = sha256OfFile(library);
-  } catch (const std::exception& ex) {
-    return ex.what();
-  }
-  if (actual != e.library_sha256)
-    return "library.so SHA-256 mismatch (index " + shortKey(e.library_sha256) + "..., file " + shortKey(actual) + "...)";
-  return {};
-}
-
-std::string detail::entryProblem(const Entry& e, const fs::path& dir) {
-  std::string problem = artifactProblem(e, dir);
-  if (!problem.empty()) return problem;
-  try {
-    checkNotWritableByOthers(dir);
-    checkNotWritableByOthers(dir / "library.so");
-  } catch (const CacheError& ex) {
-    return ex.what();
-  }
-  return {};
 }
 
 struct detail::ArtifactAccess {
@@ -351,6 +341,72 @@ std::string mib(std::uint64_t bytes) {
   return buf;
 }
 
+// publish, step 1: the artifact, complete and durable, under a temporary name, with the
+// sidecar `cache repair` needs to re-create its row should the index be lost.
+Entry stageArtifact(const fs::path& artifact, const std::string& key, const EntryInfo& info, const ArtifactFiles& files) {
+  removeTreeQuietly(artifact);
+  if (::mkdir(artifact.c_str(), 0700) != 0)
+    throw CacheError(CacheError::Kind::Io, "cannot create " + artifact.string() + ": " + std::strerror(errno));
+  copyFileSynced(files.library, artifact / "library.so", 0500);
+  copyFileSynced(files.description, artifact / "description.json", 0400);
+  if (!files.sources.empty()) {
+    ::mkdir((artifact / "src").c_str(), 0700);
+    for (const fs::path& source : files.sources)
+      compressFileSynced(source, artifact / "src" / (source.filename().string() + ".zst"));
+    fsyncDirectory(artifact / "src");
+  }
+  writeFileSynced(artifact / "pin", "");
+  Entry sidecar;
+  sidecar.key = key;
+  sidecar.info = info;
+  sidecar.library_bytes = fs::file_size(artifact / "library.so");
+  sidecar.library_sha256 = sha256OfFile(artifact / "library.so");
+  sidecar.created = unixSeconds();
+  writeFileSynced(artifact / kSidecarName, sidecarText(sidecar));
+  fsyncDirectory(artifact);
+  sidecar.total_bytes = directoryBytes(artifact);
+  sidecar.last_used = sidecar.created;  // the row's, as entry.json's created
+  return sidecar;
+}
+
+// Step 2: room within the budget, without touching entries in use. Caller holds the mutex.
+void requireRoom(Cache::State& s, const Entry& staged) {
+  const std::uint64_t budget = s.options.budget_bytes;
+  const std::string what = staged.info.robot + "/" + staged.info.function;
+  if (budget != 0 && staged.total_bytes > budget)
+    throw CacheError(CacheError::Kind::Budget, "the library for " + what + " needs " + mib(staged.total_bytes) +
+                                                   ", more than the whole cache budget of " + mib(budget) +
+                                                   "; raise the budget");
+  GcReport room;
+  if (!makeRoom(s, budget, staged.total_bytes, staged.key, room))
+    throw CacheError(CacheError::Kind::Budget,
+                     "the cache budget of " + mib(budget) + " is full: " + std::to_string(room.kept_in_use) +
+                         " entries in use hold " + mib(room.bytes_after) + " and cannot be evicted, and " + what +
+                         " needs " + mib(staged.total_bytes) + "; raise the budget or release the functions in use");
+}
+
+// Step 3: into place, then indexed as ready; a copy someone published first is kept
+// instead. Caller holds the mutex.
+void placeAndIndex(Cache::State& s, const fs::path& artifact, const Entry& staged) {
+  std::optional<Entry> row = s.db->entry(staged.key);
+  if (row && row->state == "ready") {
+    removeTreeQuietly(artifact);
+    return;
+  }
+  const fs::path target = s.objectDir(staged.key);
+  makePrivateSubdirectory(target.parent_path());
+  std::error_code ec;
+  if (fs::exists(target, ec)) {
+    // Left by a process that died between its rename and its index update: unverified.
+    fs::rename(target, s.quarantine() / (staged.key + "." + std::to_string(unixMilliseconds()) + ".unindexed"), ec);
+  }
+  if (::rename(artifact.c_str(), target.c_str()) != 0)
+    throw CacheError(CacheError::Kind::Io, "cannot move " + artifact.string() + " into place as " + target.string() +
+                                               ": " + std::strerror(errno));
+  fsyncDirectory(target.parent_path());
+  detail::indexReadyRow(s, staged, detail::ExistingRow::Replace);
+}
+
 }  // namespace
 
 Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const ArtifactFiles& files) {
@@ -358,85 +414,10 @@ Artifact Cache::publish(const Claim& claim, const EntryInfo& info, const Artifac
   State& s = *state_;
   const fs::path artifact = s.artifactStagingDir(claim);
   try {
-    // 1. The artifact, complete and durable, under a temporary name.
-    removeTreeQuietly(artifact);
-    if (::mkdir(artifact.c_str(), 0700) != 0)
-      throw CacheError(CacheError::Kind::Io, "cannot create " + artifact.string() + ": " + std::strerror(errno));
-    copyFileSynced(files.library, artifact / "library.so", 0500);
-    copyFileSynced(files.description, artifact / "description.json", 0400);
-    if (!files.sources.empty()) {
-      ::mkdir((artifact / "src").c_str(), 0700);
-      for (const fs::path& source : files.sources)
-        compressFileSynced(source, artifact / "src" / (source.filename().string() + ".zst"));
-      fsyncDirectory(artifact / "src");
-    }
-    writeFileSynced(artifact / "pin", "");
-    const std::string sha = sha256OfFile(artifact / "library.so");
-    const std::uint64_t library_bytes = fs::file_size(artifact / "library.so");
-    // What `cache repair` needs to re-create this row should the index be lost.
-    Entry sidecar;
-    sidecar.key = claim.key;
-    sidecar.info = info;
-    sidecar.library_bytes = library_bytes;
-    sidecar.library_sha256 = sha;
-    sidecar.created = unixSeconds();
-    writeFileSynced(artifact / kSidecarName, sidecarText(sidecar));
-    fsyncDirectory(artifact);
-    const std::uint64_t total_bytes = directoryBytes(artifact);
-
+    const Entry staged = stageArtifact(artifact, claim.key, info, files);
     std::lock_guard lock(s.mutex);
-    // 2. Room within the budget, without touching entries in use.
-    const std::uint64_t budget = s.options.budget_bytes;
-    if (budget != 0 && total_bytes > budget)
-      throw CacheError(CacheError::Kind::Budget, "the library for " + info.robot + "/" + info.function + " needs " +
-                                                     mib(total_bytes) + ", more than the whole cache budget of " +
-                                                     mib(budget) + "; raise the budget");
-    GcReport room;
-    if (!makeRoom(s, budget, total_bytes, claim.key, room))
-      throw CacheError(CacheError::Kind::Budget,
-                       "the cache budget of " + mib(budget) + " is full: " + std::to_string(room.kept_in_use) +
-                           " entries in use hold " + mib(room.bytes_after) + " and cannot be evicted, and " +
-                           info.robot + "/" + info.function + " needs " + mib(total_bytes) +
-                           "; raise the budget or release the functions in use");
-    // 3. Into place, then indexed as ready.
-    std::optional<Entry> row = s.db->entry(claim.key);
-    if (row && row->state == "ready") {
-      removeTreeQuietly(artifact);  // someone published the same content first
-    } else {
-      const fs::path target = s.objectDir(claim.key);
-      makePrivateSubdirectory(target.parent_path());
-      std::error_code ec;
-      if (fs::exists(target, ec)) {
-        // Left by a process that died between its rename and its index update: unverified.
-        fs::rename(target, s.quarantine() / (claim.key + "." + std::to_string(unixMilliseconds()) + ".unindexed"), ec);
-      }
-      if (::rename(artifact.c_str(), target.c_str()) != 0)
-        throw CacheError(CacheError::Kind::Io, "cannot move " + artifact.string() + " into place as " +
-                                                   target.string() + ": " + std::strerror(errno));
-      fsyncDirectory(target.parent_path());
-      const std::int64_t now = sidecar.created;  // the row and entry.json agree
-      s.db->immediate([&] {
-        Statement insert(s.db->handle(),
-                  "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, "
-                  "library_bytes, total_bytes, library_sha256, created, last_used, hits, owner, lease_expires_ms) "
-                  "VALUES (?, 'ready', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, '', 0) "
-                  "ON CONFLICT (key) DO UPDATE SET state = 'ready', model_hash = excluded.model_hash, "
-                  "robot = excluded.robot, function = excluded.function, spec = excluded.spec, sizes = excluded.sizes, "
-                  "compiler = excluded.compiler, build_seconds = excluded.build_seconds, "
-                  "library_bytes = excluded.library_bytes, total_bytes = excluded.total_bytes, "
-                  "library_sha256 = excluded.library_sha256, created = excluded.created, "
-                  "last_used = excluded.last_used, hits = 0, owner = '', lease_expires_ms = 0");
-        bindInfo(insert.bind(1, claim.key), 2, info)
-            .bind(8, info.build_seconds)
-            .bind(9, static_cast<std::int64_t>(library_bytes))
-            .bind(10, static_cast<std::int64_t>(total_bytes))
-            .bind(11, sha)
-            .bind(12, now)
-            .bind(13, now)
-            .run();
-        recordPortableKey(s.db->handle(), claim.key, info);
-      });
-    }
+    requireRoom(s, staged);
+    placeAndIndex(s, artifact, staged);
     removeTreeQuietly(s.stagingDir(claim));
   } catch (...) {
     removeTreeQuietly(artifact);

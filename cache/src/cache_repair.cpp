@@ -42,30 +42,6 @@ std::string recoverableEntry(const std::string& key, const fs::path& dir, Entry&
   return entryProblem(entry, dir);
 }
 
-void insertReadyRow(Cache::State& s, const Entry& e) {
-  s.db->immediate([&] {
-    Statement(s.db->handle(),
-              "INSERT INTO entries (key, state, model_hash, robot, function, spec, sizes, compiler, build_seconds, "
-              "library_bytes, total_bytes, library_sha256, created, last_used, hits, owner, lease_expires_ms) "
-              "VALUES (?, 'ready', ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, '', 0) ON CONFLICT (key) DO NOTHING")
-        .bind(1, e.key)
-        .bind(2, e.info.model_hash)
-        .bind(3, e.info.robot)
-        .bind(4, e.info.function)
-        .bind(5, e.info.spec)
-        .bind(6, e.info.sizes)
-        .bind(7, e.info.compiler)
-        .bind(8, e.info.build_seconds)
-        .bind(9, static_cast<std::int64_t>(e.library_bytes))
-        .bind(10, static_cast<std::int64_t>(e.total_bytes))
-        .bind(11, e.library_sha256)
-        .bind(12, e.created)
-        .bind(13, e.last_used)
-        .run();
-    recordPortableKey(s.db->handle(), e.key, e.info);
-  });
-}
-
 }  // namespace
 
 RepairReport detail::repairIndex(Cache::State& s) {
@@ -95,7 +71,7 @@ RepairReport detail::repairIndex(Cache::State& s) {
     std::error_code ec;
     if (!fs::exists(dir / "pin", ec)) writeFileSynced(dir / "pin", "");
     entry.total_bytes = directoryBytes(dir);
-    insertReadyRow(s, entry);
+    indexReadyRow(s, entry, ExistingRow::Keep);
     ++report.recovered;
   }
   return report;

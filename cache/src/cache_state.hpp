@@ -46,6 +46,11 @@ void quarantineEntry(Cache::State& s, const std::string& key, const std::string&
 // inserted the row.
 void recordPortableKey(sqlite3* db, const std::string& key, const EntryInfo& info);
 
+// Indexes `e` as ready, with its portable key, in one transaction. A row already there
+// for its key is replaced (a publish), or kept (`cache repair`: the index wins).
+enum class ExistingRow : std::uint8_t { Replace, Keep };
+void indexReadyRow(Cache::State& s, const Entry& e, ExistingRow existing);
+
 }  // namespace detail
 }  // namespace robodiff::cache
 
