@@ -143,6 +143,82 @@ std::string resolveCompiler(const CompilerOptions& options) {
   return path;
 }
 
+// The commands that build `library` in `dir` into `temp`: one compile-and-link for a
+// single source; else one compile per source (run in parallel), then one link.
+struct BuildCommands {
+  std::vector<std::vector<std::string>> compile, link;
+};
+
+BuildCommands buildCommands(const GeneratedLibrary& library, const CompileReport& report, const fs::path& dir,
+                            const fs::path& temp) {
+  auto base = [&] {
+    std::vector<std::string> argv{report.compiler};
+    argv.insert(argv.end(), report.flags.begin(), report.flags.end());
+    argv.push_back("-I" + dir.string());
+    return argv;
+  };
+  BuildCommands commands;
+  if (library.sources.size() == 1) {
+    auto argv = base();
+    argv.insert(argv.end(), {"-shared", "-o", temp.string(), (dir / library.sources[0].path).string(), "-lm"});
+    commands.compile.push_back(argv);
+    return commands;
+  }
+  auto link_argv = base();
+  link_argv.insert(link_argv.end(), {"-shared", "-o", temp.string()});
+  for (const auto& src : library.sources) {
+    const fs::path source = dir / src.path;
+    fs::path object = source;
+    object.replace_extension(".o");
+    auto argv = base();
+    argv.insert(argv.end(), {"-c", "-o", object.string(), source.string()});
+    commands.compile.push_back(argv);
+    link_argv.push_back(object.string());
+  }
+  link_argv.push_back("-lm");
+  commands.link.push_back(link_argv);
+  return commands;
+}
+
+// Runs `commands` (in parallel up to limits.jobs) into `report`: their command lines, the
+// largest peak memory, their output. Throws the CompileError of the process that failed
+// (not of those cancelled because of it) after removing `temp`.
+void runCommands(const std::vector<std::vector<std::string>>& commands, const detail::ProcessLimits& limits,
+                 const CompilerOptions& options, const fs::path& temp, CompileReport& report) {
+  if (commands.empty()) return;
+  const auto outcomes = detail::runProcesses(commands, limits);
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    report.commands.push_back(detail::commandLine(commands[i]));
+    report.peak_memory_bytes = std::max(report.peak_memory_bytes, outcomes[i].peak_rss_bytes);
+    report.diagnostics += outcomes[i].output;
+  }
+  std::error_code ec;
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    const auto& o = outcomes[i];
+    if (!o.ok() && o.state != ProcessOutcome::State::Cancelled) {
+      fs::remove(temp, ec);
+      throw failure(o, detail::commandLine(commands[i]), options);
+    }
+  }
+  for (const auto& o : outcomes) {
+    if (!o.ok()) {
+      fs::remove(temp, ec);
+      throw failure(o, "(cancelled)", options);
+    }
+  }
+}
+
+// Where the library is linked before it is renamed into place: beside it, under a name
+// unique to this process and call.
+fs::path temporaryLibraryPath(const fs::path& output) {
+  static std::atomic<unsigned> counter{0};
+  const fs::path out_dir = output.parent_path().empty() ? fs::path(".") : output.parent_path();
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  return out_dir / ("." + output.filename().string() + ".tmp." + std::to_string(getpid()) + "." +
+                    std::to_string(counter++));
+}
+
 }  // namespace
 
 std::string compilerProgram(const CompilerOptions& options) {
@@ -195,71 +271,16 @@ CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& ou
   for (const auto& f : library.headers) writeFile(build.path(), f);
   for (const auto& f : library.sources) writeFile(build.path(), f);
 
-  // The library is linked under a temporary name beside its final place, then renamed.
-  static std::atomic<unsigned> counter{0};
-  const fs::path out_dir = output.parent_path().empty() ? fs::path(".") : output.parent_path();
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  const fs::path temp = out_dir / ("." + output.filename().string() + ".tmp." + std::to_string(getpid()) + "." +
-                                   std::to_string(counter++));
-
-  auto base = [&] {
-    std::vector<std::string> argv{report.compiler};
-    argv.insert(argv.end(), report.flags.begin(), report.flags.end());
-    argv.push_back("-I" + build.path().string());
-    return argv;
-  };
-  std::vector<std::vector<std::string>> compile, link;
-  if (library.sources.size() == 1) {
-    auto argv = base();
-    argv.insert(argv.end(), {"-shared", "-o", temp.string(), (build.path() / library.sources[0].path).string(), "-lm"});
-    compile.push_back(argv);
-  } else {
-    auto link_argv = base();
-    link_argv.insert(link_argv.end(), {"-shared", "-o", temp.string()});
-    for (const auto& src : library.sources) {
-      const fs::path source = build.path() / src.path;
-      fs::path object = source;
-      object.replace_extension(".o");
-      auto argv = base();
-      argv.insert(argv.end(), {"-c", "-o", object.string(), source.string()});
-      compile.push_back(argv);
-      link_argv.push_back(object.string());
-    }
-    link_argv.push_back("-lm");
-    link.push_back(link_argv);
-  }
-
+  const fs::path temp = temporaryLibraryPath(output);
+  const BuildCommands commands = buildCommands(library, report, build.path(), temp);
   detail::ProcessLimits limits;
   if (options.timeout.count() > 0) limits.deadline = started + options.timeout;
   limits.address_space_bytes = options.memory_limit_bytes;
   limits.jobs = options.jobs;
-  auto run = [&](const std::vector<std::vector<std::string>>& commands) {
-    if (commands.empty()) return;
-    const auto outcomes = detail::runProcesses(commands, limits);
-    for (std::size_t i = 0; i < commands.size(); ++i) {
-      report.commands.push_back(detail::commandLine(commands[i]));
-      report.peak_memory_bytes = std::max(report.peak_memory_bytes, outcomes[i].peak_rss_bytes);
-      report.diagnostics += outcomes[i].output;
-    }
-    // Report the process that failed, not the ones cancelled because of it.
-    for (std::size_t i = 0; i < commands.size(); ++i) {
-      const auto& o = outcomes[i];
-      if (!o.ok() && o.state != ProcessOutcome::State::Cancelled) {
-        fs::remove(temp, ec);
-        throw failure(o, detail::commandLine(commands[i]), options);
-      }
-    }
-    for (const auto& o : outcomes) {
-      if (!o.ok()) {
-        fs::remove(temp, ec);
-        throw failure(o, "(cancelled)", options);
-      }
-    }
-  };
-  run(compile);
-  run(link);
+  runCommands(commands.compile, limits, options, temp, report);
+  runCommands(commands.link, limits, options, temp, report);
 
+  std::error_code ec;
   fs::rename(temp, output, ec);
   if (ec) {
     const std::string why = ec.message();
