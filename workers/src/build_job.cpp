@@ -236,6 +236,61 @@ BuildOutcome buildOutcomeFromJson(const std::string& json_text) {
 
 // --- preparing and running a build ---
 
+namespace {
+
+// The prepared build's library options, within the limits the requester set.
+LibraryOptions workerLibraryOptions(const cache::PreparedBuild& prepared, const BuildRequest& request) {
+  LibraryOptions options = prepared.options;
+  options.compiler.memory_limit_bytes = request.compiler_memory_limit_bytes;
+  options.compiler.timeout = request.compiler_timeout;
+  options.compiler.jobs = request.compiler_jobs;
+  return options;
+}
+
+// The cache row of the built library: what the requester said, completed from what this
+// worker prepared and built.
+cache::EntryInfo publishedInfo(const BuildRequest& request, const cache::PreparedBuild& prepared,
+                               const GeneratedFunctionLibrary& generated, double build_seconds) {
+  cache::EntryInfo info = request.info;
+  const cache::EntryInfo& known = prepared.info;
+  if (info.model_hash.empty()) info.model_hash = known.model_hash;
+  if (info.robot.empty()) info.robot = known.robot;
+  if (info.function.empty()) info.function = known.function;
+  if (info.spec.empty()) info.spec = known.spec;
+  if (info.compiler.empty()) info.compiler = known.compiler;
+  info.portable_key = known.portable_key;  // from the identity this worker checked the key against
+  info.sizes = blockSizes(generated.built.definition);
+  info.build_seconds = build_seconds;
+  return info;
+}
+
+// The exception being handled, as the outcome's error kind and message.
+void failWithCurrentException(BuildOutcome& outcome) {
+  try {
+    throw;
+  } catch (const ModelError& e) {
+    fail(outcome, "invalid_urdf", e.what());
+  } catch (const SpecError& e) {
+    fail(outcome, "invalid_spec", e.what());
+  } catch (const symbolic::GraphTooLarge& e) {
+    fail(outcome, "graph_too_large", e.what());
+  } catch (const codegen::CompileError& e) {
+    fail(outcome, compileErrorKind(e.kind()), e.what(), e.compilerOutput());
+  } catch (const cache::CacheError& e) {
+    fail(outcome, "cache", e.what());
+  } catch (const std::bad_alloc&) {
+    fail(outcome, "internal",
+         "out of memory while building (std::bad_alloc): the worker's address-space limit is too low for this "
+         "function, or the machine is out of memory");
+  } catch (const std::exception& e) {
+    fail(outcome, "internal", e.what());
+  } catch (...) {
+    fail(outcome, "internal", "unknown exception");
+  }
+}
+
+}  // namespace
+
 BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(const std::string& stage)>& progress) {
   const auto started = Clock::now();
   auto stage = [&](const char* name) {
@@ -259,58 +314,29 @@ BuildOutcome executeBuild(const BuildRequest& request, const std::function<void(
                "different robodiff versions, or a different compiler or $CC?)");
       return outcome;
     }
-    LibraryOptions options = prepared.options;
-    options.compiler.memory_limit_bytes = request.compiler_memory_limit_bytes;
-    options.compiler.timeout = request.compiler_timeout;
-    options.compiler.jobs = request.compiler_jobs;
-
     cache::CacheOptions cache_options;
     cache_options.budget_bytes = request.cache_budget_bytes;
     cache_options.create = false;  // the requester made it; a missing one is an error
     cache::Cache cache = cache::Cache::open(request.cache_dir, cache_options);
     staging = cache.stagingDir(request.claim);
 
+    LibraryOptions options = workerLibraryOptions(prepared, request);
     options.on_stage = stage;
     const GeneratedFunctionLibrary generated = generateFunctionLibrary(model, spec, staging / "build", options);
 
     stage("publish");
-    cache::EntryInfo info = request.info;
-    const cache::EntryInfo& known = prepared.info;
-    if (info.model_hash.empty()) info.model_hash = known.model_hash;
-    if (info.robot.empty()) info.robot = known.robot;
-    if (info.function.empty()) info.function = known.function;
-    if (info.spec.empty()) info.spec = known.spec;
-    if (info.compiler.empty()) info.compiler = known.compiler;
-    info.portable_key = known.portable_key;  // from the identity this worker checked the key against
-    info.sizes = blockSizes(generated.built.definition);
-    info.build_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    const double build_seconds = std::chrono::duration<double>(Clock::now() - started).count();
     cache::ArtifactFiles files;
     files.library = generated.library;
     files.description = generated.description;
     files.sources = sourceFiles(generated.library.parent_path() / "src");
-    cache.publish(request.claim, info, files);
+    cache.publish(request.claim, publishedInfo(request, prepared, generated, build_seconds), files);
 
     outcome.ok = true;
     outcome.operations = generated.info.operations;
     outcome.library_bytes = generated.library_bytes;
-  } catch (const ModelError& e) {
-    fail(outcome, "invalid_urdf", e.what());
-  } catch (const SpecError& e) {
-    fail(outcome, "invalid_spec", e.what());
-  } catch (const symbolic::GraphTooLarge& e) {
-    fail(outcome, "graph_too_large", e.what());
-  } catch (const codegen::CompileError& e) {
-    fail(outcome, compileErrorKind(e.kind()), e.what(), e.compilerOutput());
-  } catch (const cache::CacheError& e) {
-    fail(outcome, "cache", e.what());
-  } catch (const std::bad_alloc&) {
-    fail(outcome, "internal",
-         "out of memory while building (std::bad_alloc): the worker's address-space limit is too low for this "
-         "function, or the machine is out of memory");
-  } catch (const std::exception& e) {
-    fail(outcome, "internal", e.what());
   } catch (...) {
-    fail(outcome, "internal", "unknown exception");
+    failWithCurrentException(outcome);
   }
   if (!outcome.ok && !staging.empty()) {
     std::error_code ec;  // the claim is the requester's to abandon; the files are ours
