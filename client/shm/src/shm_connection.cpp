@@ -290,55 +290,36 @@ struct ShmConnection::Impl {
                                          serviceName(options.service) + " in time"};
   }
 
-  // One call: loan a request of chunkSize(0, body_size) bytes, let `fill` write the body,
-  // send, wait for the reply, let `on_reply` read an OK reply's body.
-  template <class Fill, class OnReply>
-  Status call(rpc::Method method, std::uint64_t body_size, CallOptions call_options, Fill&& fill, OnReply&& on_reply) {
-    const auto timeout = call_options.timeout.count() > 0 ? call_options.timeout : options.default_timeout;
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(timeout);
-    const std::uint64_t size = shm::chunkSize(0, body_size);
-    if (size > options.max_chunk_payload)
-      return {StatusCode::ResourceExhausted, std::string(rpc::toString(method)) + " request of " + std::to_string(size) +
-                                                 " bytes exceeds the iceoryx transport's limit of " +
-                                                 std::to_string(options.max_chunk_payload) +
-                                                 " bytes (the largest shared-memory pool); nothing was sent"};
-    {
-      std::unique_lock lock(slot_mutex);
-      if (!slot_cv.wait_until(lock, deadline, [&] { return slots_used < options.max_in_flight; }))
-        return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply within " +
-                                                  milliseconds(timeout) + " (the call waited for a free slot)"};
-      ++slots_used;
+  // Waits until `deadline` for one of the max_in_flight slots, and takes it.
+  Status takeSlot(rpc::Method method, std::chrono::nanoseconds timeout, Clock::time_point deadline) {
+    std::unique_lock lock(slot_mutex);
+    if (!slot_cv.wait_until(lock, deadline, [&] { return slots_used < options.max_in_flight; }))
+      return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply within " +
+                                                milliseconds(timeout) + " (the call waited for a free slot)"};
+    ++slots_used;
+    return {};
+  }
+  struct SlotGuard {  // gives the slot back when the call ends
+    Impl& d;
+    ~SlotGuard() {
+      std::lock_guard lock(d.slot_mutex);
+      --d.slots_used;
+      d.slot_cv.notify_one();
     }
-    struct SlotGuard {
-      Impl& d;
-      ~SlotGuard() {
-        std::lock_guard lock(d.slot_mutex);
-        --d.slots_used;
-        d.slot_cv.notify_one();
-      }
-    } slot_guard{*this};
+  };
+  struct LoanGuard {  // gives the loan slot back once the request is sent (or given up)
+    Impl& d;
+    bool held = true;
+    void release() {
+      if (held) d.loans.release();
+      held = false;
+    }
+    ~LoanGuard() { release(); }
+  };
 
-    // Per thread and reused: assigning the same ids again keeps their strings' capacity,
-    // so a call allocates nothing after this thread's first.
-    thread_local rpc::RequestHeader header;
-    header.schema_version = options.schema_version;
-    header.client_id = client_id;
-    header.correlation_id = next_correlation.fetch_add(1);
-    header.deadline_budget_ns = static_cast<std::uint64_t>(timeout.count());
-    header.server_instance_id = options.server_instance_id;
-
-    void* chunk = nullptr;
-    loans.acquire();
-    struct LoanGuard {  // gives the loan slot back once the request is sent (or given up)
-      Impl& d;
-      bool held = true;
-      void release() {
-        if (held) d.loans.release();
-        held = false;
-      }
-      ~LoanGuard() { release(); }
-    } loan_guard{*this};
-    SessionPortPtr to;  // the session the request goes to, and its reply comes from
+  // A request chunk of `size` bytes loaned from the current session, and that session
+  // (`to`); without one, or after a server restart, a session is opened first (once).
+  Status loanRequest(std::uint64_t size, Clock::time_point deadline, void** chunk, SessionPortPtr* to) {
     for (int attempt = 0;; ++attempt) {
       {
         std::lock_guard lock(port_mutex);
@@ -348,57 +329,40 @@ struct ShmConnection::Impl {
             return {StatusCode::ResourceExhausted, "could not loan a " + std::to_string(size) +
                                                        "-byte shared-memory chunk: " + loanError(loaned.get_error()) +
                                                        "; retry later"};
-          chunk = loaned.value();
-          to = session;
-          break;
+          *chunk = loaned.value();
+          *to = session;
+          return {};
         }
       }
-      // No session yet, or the server restarted: open one (once per call).
       if (attempt > 0) return noServer();
       if (Status s = openSession(deadline); !s.ok()) return s;
     }
-    shm::writeRequestHeader(chunk, header, method, body_size);
-    fill(shm::bodyOf(chunk));
-    iox::popo::RequestHeader::fromPayload(chunk)->setSequenceId(static_cast<std::int64_t>(header.correlation_id));
+  }
 
-    Pending waiting;
-    waiting.sent_to = to.get();
-    {
-      std::lock_guard lock(pending_mutex);
-      pending.emplace_back(header.correlation_id, &waiting);
-    }
-    auto forget = [&] {
-      std::lock_guard lock(pending_mutex);
-      erasePending(header.correlation_id);
-    };
-    bool sent;
-    {
-      std::lock_guard lock(port_mutex);
-      sent = !to->port->send(chunk).has_error();  // on error iceoryx releases the chunk
-    }
-    loan_guard.release();
-    if (!sent) {
-      forget();
-      return noServer();
-    }
-    // Replies usually come within microseconds: poll the port here briefly before
-    // sleeping on the condition variable (saves the receive thread's wake-up and ours).
+  // Waits until `deadline` for the reply to `correlation`. Replies usually come within
+  // microseconds: the port is polled here briefly before sleeping on the condition
+  // variable (saves the receive thread's wake-up and ours).
+  Status awaitReply(const Pending& waiting, std::uint64_t correlation, rpc::Method method,
+                    std::chrono::nanoseconds timeout, Clock::time_point deadline) {
     for (const auto spin_until = Clock::now() + kSpin; !waiting.done.load() && Clock::now() < spin_until;)
       if (!pollOnce()) std::this_thread::yield();
-    {
-      std::unique_lock lock(pending_mutex);
-      pending_cv.wait_until(lock, deadline, [&] { return waiting.done.load(); });
-      erasePending(header.correlation_id);
-      if (!waiting.done)
-        return {StatusCode::DeadlineExceeded, std::string(rpc::toString(method)) + ": no reply from the robodiff server within " +
-                                                  milliseconds(timeout)};
-    }
-    if (waiting.response == nullptr) return waiting.failure;
+    std::unique_lock lock(pending_mutex);
+    pending_cv.wait_until(lock, deadline, [&] { return waiting.done.load(); });
+    erasePending(correlation);
+    if (!waiting.done)
+      return {StatusCode::DeadlineExceeded,
+              std::string(rpc::toString(method)) + ": no reply from the robodiff server within " + milliseconds(timeout)};
+    return {};
+  }
 
+  // The reply `waiting` received, checked to answer `header`'s request, read by
+  // `on_reply` when OK; the response chunk is released.
+  template <class OnReply>
+  Status readReply(const Pending& waiting, const rpc::RequestHeader& header, rpc::Method method, OnReply&& on_reply) {
     const void* response = waiting.response;
     SessionPort& from = *waiting.from;
     const auto response_size = iox::mepoo::ChunkHeader::fromUserPayload(response)->userPayloadSize();
-    thread_local shm::ReplyView view;  // reused, as the request header above
+    thread_local shm::ReplyView view;  // reused, as the request header
     Status result = shm::parseReply(response, response_size, view);
     if (!result.ok()) {
       result = {StatusCode::Internal, "the server's reply is unreadable: " + result.message};
@@ -412,6 +376,61 @@ struct ShmConnection::Impl {
     }
     releaseResponse(from, response);
     return result;
+  }
+
+  // One call: loan a request of chunkSize(0, body_size) bytes, let `fill` write the body,
+  // send, wait for the reply, let `on_reply` read an OK reply's body.
+  template <class Fill, class OnReply>
+  Status call(rpc::Method method, std::uint64_t body_size, CallOptions call_options, Fill&& fill, OnReply&& on_reply) {
+    const auto timeout = call_options.timeout.count() > 0 ? call_options.timeout : options.default_timeout;
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(timeout);
+    const std::uint64_t size = shm::chunkSize(0, body_size);
+    if (size > options.max_chunk_payload)
+      return {StatusCode::ResourceExhausted, std::string(rpc::toString(method)) + " request of " + std::to_string(size) +
+                                                 " bytes exceeds the iceoryx transport's limit of " +
+                                                 std::to_string(options.max_chunk_payload) +
+                                                 " bytes (the largest shared-memory pool); nothing was sent"};
+    if (Status s = takeSlot(method, timeout, deadline); !s.ok()) return s;
+    SlotGuard slot_guard{*this};
+
+    // Per thread and reused: assigning the same ids again keeps their strings' capacity,
+    // so a call allocates nothing after this thread's first.
+    thread_local rpc::RequestHeader header;
+    header.schema_version = options.schema_version;
+    header.client_id = client_id;
+    header.correlation_id = next_correlation.fetch_add(1);
+    header.deadline_budget_ns = static_cast<std::uint64_t>(timeout.count());
+    header.server_instance_id = options.server_instance_id;
+
+    loans.acquire();
+    LoanGuard loan_guard{*this};
+    void* chunk = nullptr;
+    SessionPortPtr to;  // the session the request goes to, and its reply comes from
+    if (Status s = loanRequest(size, deadline, &chunk, &to); !s.ok()) return s;
+    shm::writeRequestHeader(chunk, header, method, body_size);
+    fill(shm::bodyOf(chunk));
+    iox::popo::RequestHeader::fromPayload(chunk)->setSequenceId(static_cast<std::int64_t>(header.correlation_id));
+
+    Pending waiting;
+    waiting.sent_to = to.get();
+    {
+      std::lock_guard lock(pending_mutex);
+      pending.emplace_back(header.correlation_id, &waiting);
+    }
+    bool sent;
+    {
+      std::lock_guard lock(port_mutex);
+      sent = !to->port->send(chunk).has_error();  // on error iceoryx releases the chunk
+    }
+    loan_guard.release();
+    if (!sent) {
+      std::lock_guard lock(pending_mutex);
+      erasePending(header.correlation_id);
+      return noServer();
+    }
+    if (Status s = awaitReply(waiting, header.correlation_id, method, timeout, deadline); !s.ok()) return s;
+    if (waiting.response == nullptr) return waiting.failure;
+    return readReply(waiting, header, method, on_reply);
   }
 
   template <class Request, class Reply>
