@@ -195,7 +195,15 @@ class Parser {
     onlyKeys(root, "", {"function", "inputs", "outputs", "frame", "reference", "build"});
     FunctionSpec spec;
     parseBuild(root, spec);
+    const FunctionInfo& info = parseFunction(root, spec);
+    parseInputs(root, info, spec);
+    parseOutputs(root, spec);
+    parseFrame(root, info, spec);
+    return spec;
+  }
 
+  // "function": the model function, with its inputs all variable.
+  const FunctionInfo& parseFunction(const json& root, FunctionSpec& spec) {
     if (!root.contains("function")) fail("function", "missing (one of: " + functionList() + ")");
     const std::string name = string(root["function"], "function");
     const FunctionInfo* info = nullptr;
@@ -203,77 +211,80 @@ class Parser {
       if (name == f.name) info = &f;
     if (!info) fail("function", language::quote(name) + " is not a model function (one of: " + functionList() + ")");
     spec.function = info->function;
-
     for (const std::string& input : info->inputs) spec.inputs.push_back({input, std::nullopt});
-    if (root.contains("inputs")) {
-      const json& inputs = root["inputs"];
-      if (!inputs.is_object()) fail("inputs", "must be an object {\"q\": \"variable\", \"v\": {\"fixed\": [...]}, ...}");
-      for (const auto& [key, value] : inputs.items()) {
-        const std::string path = "inputs." + key;
-        InputSpec* target = nullptr;
-        for (InputSpec& i : spec.inputs)
-          if (i.name == key) target = &i;
-        if (!target) fail(path, language::quote(key) + " is not an input of " + info->name);
-        if (value.is_string() && value.get<std::string>() == "variable") continue;
-        if (value.is_object() && value.size() == 1 && value.contains("fixed")) {
-          target->fixed = numbers(value["fixed"], path + ".fixed");
-          continue;
-        }
-        fail(path, shown(value) + " is neither \"variable\" nor {\"fixed\": [numbers]}");
-      }
-    }
+    return *info;
+  }
 
+  // "inputs": each "variable" or {"fixed": [numbers]}.
+  void parseInputs(const json& root, const FunctionInfo& info, FunctionSpec& spec) {
+    if (!root.contains("inputs")) return;
+    const json& inputs = root["inputs"];
+    if (!inputs.is_object()) fail("inputs", "must be an object {\"q\": \"variable\", \"v\": {\"fixed\": [...]}, ...}");
+    for (const auto& [key, value] : inputs.items()) {
+      const std::string path = "inputs." + key;
+      InputSpec* target = nullptr;
+      for (InputSpec& i : spec.inputs)
+        if (i.name == key) target = &i;
+      if (!target) fail(path, language::quote(key) + " is not an input of " + info.name);
+      if (value.is_string() && value.get<std::string>() == "variable") continue;
+      if (value.is_object() && value.size() == 1 && value.contains("fixed")) {
+        target->fixed = numbers(value["fixed"], path + ".fixed");
+        continue;
+      }
+      fail(path, shown(value) + " is neither \"variable\" nor {\"fixed\": [numbers]}");
+    }
+  }
+
+  // "outputs": a non-empty array of values, Jacobians and Hessians.
+  void parseOutputs(const json& root, FunctionSpec& spec) {
     if (!root.contains("outputs")) fail("outputs", "missing: list at least one output, e.g. [{\"kind\": \"value\"}]");
     const json& outputs = root["outputs"];
     if (!outputs.is_array() || outputs.empty()) fail("outputs", "must be a non-empty array");
-    for (size_t i = 0; i < outputs.size(); ++i) {
-      const std::string path = "outputs[" + std::to_string(i) + "]";
-      const json& o = outputs[i];
-      if (!o.is_object()) fail(path, shown(o) + " is not an object {\"kind\": ...}");
-      if (!o.contains("kind")) fail(path + ".kind", "missing (value, jacobian or hessian)");
-      const std::string kind = string(o["kind"], path + ".kind");
-      OutputSpec out;
-      if (kind == "value") {
-        onlyKeys(o, path, {"kind"});
-      } else if (kind == "jacobian") {
-        onlyKeys(o, path, {"kind", "wrt", "layout"});
-        out.kind = OutputKind::Jacobian;
-        if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
-        out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
-        out.layout = layoutOf(o, path);
-      } else if (kind == "hessian") {
-        onlyKeys(o, path, {"kind", "wrt", "weights", "layout"});
-        out.kind = OutputKind::Hessian;
-        if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
-        out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
-        out.layout = layoutOf(o, path);
-        if (o.contains("weights") && !(o["weights"].is_string() && o["weights"] == "input"))
-          out.fixed_weights = numbers(o["weights"], path + ".weights");
-      } else {
-        fail(path + ".kind", language::quote(kind) + " is not an output kind (value, jacobian or hessian)");
-      }
-      spec.outputs.push_back(out);
-    }
+    for (size_t i = 0; i < outputs.size(); ++i) spec.outputs.push_back(output(outputs[i], "outputs[" + std::to_string(i) + "]", spec));
+  }
 
-    if (info->needs_frame) {
-      if (!root.contains("frame")) fail("frame", std::string("missing: ") + info->name + " needs a frame name");
+  OutputSpec output(const json& o, const std::string& path, const FunctionSpec& spec) {
+    if (!o.is_object()) fail(path, shown(o) + " is not an object {\"kind\": ...}");
+    if (!o.contains("kind")) fail(path + ".kind", "missing (value, jacobian or hessian)");
+    const std::string kind = string(o["kind"], path + ".kind");
+    OutputSpec out;
+    if (kind == "value") {
+      onlyKeys(o, path, {"kind"});
+      return out;
+    }
+    if (kind != "jacobian" && kind != "hessian")
+      fail(path + ".kind", language::quote(kind) + " is not an output kind (value, jacobian or hessian)");
+    const bool hessian = kind == "hessian";
+    if (hessian) onlyKeys(o, path, {"kind", "wrt", "weights", "layout"});
+    else onlyKeys(o, path, {"kind", "wrt", "layout"});
+    out.kind = hessian ? OutputKind::Hessian : OutputKind::Jacobian;
+    if (!o.contains("wrt")) fail(path + ".wrt", "missing: the inputs to differentiate against");
+    out.wrt = wrtList(o["wrt"], path + ".wrt", spec);
+    out.layout = layoutOf(o, path);
+    if (hessian && o.contains("weights") && !(o["weights"].is_string() && o["weights"] == "input"))
+      out.fixed_weights = numbers(o["weights"], path + ".weights");
+    return out;
+  }
+
+  // "frame" where the function needs one (and nowhere else); "reference" for a frame
+  // Jacobian.
+  void parseFrame(const json& root, const FunctionInfo& info, FunctionSpec& spec) {
+    if (info.needs_frame) {
+      if (!root.contains("frame")) fail("frame", std::string("missing: ") + info.name + " needs a frame name");
       spec.frame = string(root["frame"], "frame");
       if (spec.frame.empty()) fail("frame", "empty frame name");
     } else if (root.contains("frame")) {
-      fail("frame", shown(root["frame"]) + " given, but " + info->name + " takes no frame");
+      fail("frame", shown(root["frame"]) + " given, but " + info.name + " takes no frame");
     }
-    if (root.contains("reference")) {
-      if (spec.function != ModelFunction::FrameJacobian)
-        fail("reference", std::string("only frame_jacobian takes a reference frame, not ") + info->name);
-      const std::string ref = string(root["reference"], "reference");
-      try {
-        spec.reference = parseReferenceFrame(ref);
-      } catch (const std::invalid_argument& e) {
-        fail("reference", e.what());
-      }
+    if (!root.contains("reference")) return;
+    if (spec.function != ModelFunction::FrameJacobian)
+      fail("reference", std::string("only frame_jacobian takes a reference frame, not ") + info.name);
+    const std::string ref = string(root["reference"], "reference");
+    try {
+      spec.reference = parseReferenceFrame(ref);
+    } catch (const std::invalid_argument& e) {
+      fail("reference", e.what());
     }
-
-    return spec;
   }
 
   // A user function: inputs, defines, outputs (user_function_parse.cpp), build options.
