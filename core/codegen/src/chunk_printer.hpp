@@ -1,0 +1,110 @@
+// Prints one chunk of a lowered function (lowering.hpp) as the body of a C function:
+// single-knot code (`double` locals, lane pairs as `rd_pair`) or batched code (`rd_v`
+// locals, RD_W knots in the lanes), addressed plainly or compactly
+// (compact_addressing.hpp). Internal to the C emitter.
+#pragma once
+
+#include <cstdint>
+#include <set>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "compact_addressing.hpp"
+#include "lowering.hpp"
+#include "robodiff/codegen/function_definition.hpp"
+
+namespace robodiff::codegen::detail {
+
+// Concatenation by appending (GCC 12 warns falsely, -Wrestrict, on "literal" + string&&).
+template <class... Parts>
+std::string cat(const Parts&... parts) {
+  std::string s;
+  (s += ... += parts);
+  return s;
+}
+
+// Scalar: one knot, `double` locals. Vector: RD_W knots in the lanes of `rd_v` locals.
+enum class Flavour { Scalar, Vector };
+
+// Prints one chunk of a lowered function as the body of a C function.
+class ChunkPrinter {
+ public:
+  // Output blocks of at least this many values are claimed by the batched chunk.
+  static constexpr std::uint32_t kClaimMinimum = 256;
+
+  ChunkPrinter(const FunctionDefinition& f, Flavour flavour) : f_(f), flavour_(flavour) {}
+
+  // true: sin and cos by the _in_range kernels, with no range check of their own (the
+  // function checks its arguments at entry).
+  void inRangeKernels(bool on) { in_range_ = on; }
+
+  // `signature` is the function's declaration up to, not including, the body.
+  // `first`: the function's first chunk, where the batched flavour claims its outputs.
+  // `compact`: not empty, the body is addressed compactly (compact_addressing.hpp): its
+  // constants in the table `compact`_k, the body itself in the function `compact`_body.
+  std::string print(const std::string& signature, const Chunk& chunk, bool first = false,
+                    const std::string& compact = "");
+
+ private:
+  std::string printOnce(const std::string& signature, const Chunk& chunk, bool first, const std::string& compact);
+
+  // A compactly addressed body: a function `compact`_body taking the arrays and the base
+  // pointers as restrict parameters, called by `signature`.
+  void printCompactBody(const std::string& signature, const Chunk& chunk, const std::string& compact,
+                        const std::set<std::uint32_t>& in_blocks, const std::set<std::uint32_t>& out_blocks,
+                        bool uses_work);
+
+  bool vector() const { return flavour_ == Flavour::Vector; }
+  const char* kernelSuffix() const { return in_range_ ? "_in_range" : ""; }
+  static std::string localName(std::uint32_t slot) {
+    return cat("t", std::to_string(slot));
+  }
+  const char* type() const { return vector() ? "rd_v" : "double"; }
+
+  // An array's element, its address, a constant: through the compact addressing, if any.
+  std::string element(const std::string& array, std::uint32_t index) const {
+    return compact_ ? compact_->element(array, index) : cat(array, "[", std::to_string(index), "]");
+  }
+  std::string address(const std::string& array, std::uint32_t index, std::uint32_t width) const {
+    return compact_ ? compact_->address(array, index, width) : cat(array, " + ", std::to_string(index));
+  }
+  std::string literal(double value) const;
+
+  // "rd_pair p3 = " the first time a pair local is assigned, "p3 = " after.
+  std::string assignPair(std::uint32_t slot);
+
+  // "double t3 = " the first time a local is assigned in this function, "t3 = " after.
+  std::string assign(std::uint32_t slot);
+
+  // An operand as a C expression. `helper_argument`: it is passed to a lane-wise helper,
+  // so a constant must become a vector.
+  std::string operand(const Operand& o, bool helper_argument = false) const;
+
+  // An operand of + or - as its magnitude and whether it is negated, so that the sign
+  // folds into the operator (a - b, not a + -b).
+  std::pair<std::string, bool> signedOperand(const Operand& o) const;
+
+  std::string expression(const Instr& ins) const;
+
+  // Structural zeros of a single knot's block up to this many are stored four at a time
+  // (below); more are cleared with one memset of the block.
+  // A memset costs ~35 ns before anything else runs (gcc inlines `rep stos`), so it only
+  // pays for large blocks: Solo-12's frame Jacobian (63 zeros) 77 -> 38 ns, Talos's (170)
+  // 37 -> 25 ns, Talos's M(q) (744 zeros) 530 ns with the memset, 570 ns without.
+  static constexpr std::uint32_t kStoredZerosMaximum = 256;
+
+  void printZeros(std::uint32_t block, const std::vector<ZeroRun>& runs);
+
+  void printInstr(const Instr& ins, const Chunk& chunk);
+
+  const FunctionDefinition& f_;
+  Flavour flavour_;
+  bool in_range_ = false;
+  std::ostringstream out_;
+  std::vector<char> declared_, declared_pair_;
+  CompactAddressing* compact_ = nullptr;  // during print() of a compactly addressed body
+};
+
+}  // namespace robodiff::codegen::detail
