@@ -119,6 +119,108 @@ std::uint64_t hostInstructionCacheBytes() {
   return bytes > 0 ? static_cast<std::uint64_t>(bytes) : 0;
 }
 
+namespace {
+
+// What the build report says of a lowered function.
+GeneratedFunctionInfo functionInfo(const FunctionDefinition& f, const Lowerings& l) {
+  GeneratedFunctionInfo info;
+  info.name = f.name;
+  info.needed_nodes = l.plain.needed_nodes;
+  info.operations = l.plain.operations;
+  info.sincos_pairs = l.plain.sincos_pairs;
+  info.parts = static_cast<std::uint32_t>(l.plain.chunks.size());
+  info.transfer_slots = l.plain.transfer_slots;
+  info.lane_pairs = l.paired.lane_pairs;
+  for (const Chunk& c : l.plain.chunks) info.max_locals = std::max(info.max_locals, c.slots);
+  return info;
+}
+
+bool anyPairs(const Lowerings& l) { return l.paired.lane_pairs > 0 || l.paired.sincos_lane_pairs > 0; }
+
+// The single-knot code of part p: with lane pairs (and sin-cos pairs) where the compiler
+// has vector types.
+std::string scalarPart(const FunctionDefinition& f, const Lowerings& l, const std::string& signature, std::uint32_t p) {
+  const std::uint32_t parts = static_cast<std::uint32_t>(l.plain.chunks.size());
+  const std::string table = l.compact ? "rd_" + f.name + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
+  ChunkPrinter scalar(f, Flavour::Scalar);
+  if (!anyPairs(l)) return scalar.print(signature, l.plain.chunks[p], false, table);
+  return "#if RD_PAIRS\n" + scalar.print(signature, l.paired.chunks[p], false, table) + "#else\n" +
+         scalar.print(signature, l.plain.chunks[p], false, table) + "#endif\n";
+}
+
+// A function in one part, in library.c: its single-knot entry point, with the kernels'
+// range checked at entry where that pays (a cold exact copy beside it), and its batched
+// chunk.
+void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, std::ostream& main) {
+  const std::string prefix = "rd_" + f.name;
+  const LoweredFunction& lowered = l.plain;
+  const bool checked_at_entry = !l.compact && anyPairs(l) && !lowered.sincos_inputs.empty() &&
+                                lowered.operations < kEntryRangeCheckBelow;
+  ChunkPrinter scalar(f, Flavour::Scalar);
+  if (checked_at_entry) {
+    ChunkPrinter in_range(f, Flavour::Scalar);
+    in_range.inRangeKernels(true);
+    main << "#if RD_PAIRS\n"
+         << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
+                           l.paired.chunks[0])
+         << scalar.print("RD_SCALAR_FN RD_COLD static void " + prefix + "_exact" + kEvalParams, lowered.chunks[0])
+         << detail::rangeCheckedEntry(prefix, lowered.sincos_inputs) << "#else\n"
+         << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0])
+         << "#endif\n\n";
+  } else {
+    main << scalarPart(f, l, "RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, 0) << "\n";
+  }
+  if (batched) {
+    ChunkPrinter vector(f, Flavour::Vector);
+    main << "#if RD_VECTOR\n" << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
+         << "#endif\n\n";
+  }
+}
+
+// A split function: each part in a file of its own (`head` first), declared in library.c
+// and called there in order by the function's entry points.
+void emitParts(const FunctionDefinition& f, const Lowerings& l, bool batched, const std::string& head,
+               GeneratedLibrary& lib, std::ostream& main) {
+  const std::string prefix = "rd_" + f.name;
+  const std::uint32_t parts = static_cast<std::uint32_t>(l.plain.chunks.size());
+  ChunkPrinter vector(f, Flavour::Vector);
+  for (std::uint32_t p = 0; p < parts; ++p) {
+    const std::string part = prefix + "_p" + std::to_string(p);
+    std::ostringstream file;
+    file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
+         << scalarPart(f, l, "RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, p) << "\n";
+    if (batched)
+      file << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
+           << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, l.plain.chunks[p], p == 0) << "#endif\n";
+    lib.sources.push_back({f.name + "_part" + std::to_string(p) + ".c", file.str()});
+    main << "RD_HIDDEN void " << part << kEvalParams << ";\n";
+    if (batched) main << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n#endif\n";
+  }
+  main << "\nstatic void " << prefix << "_eval" << kEvalParams << " {\n";
+  for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "(in, out, w);\n";
+  main << "}\n\n";
+  if (batched) {
+    main << "#if RD_VECTOR\nstatic void " << prefix << "_chunk" << kEvalParams << " {\n";
+    for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "_v(in, out, w);\n";
+    main << "}\n#endif\n\n";
+  }
+}
+
+// The function's row of the library's descriptor table.
+std::string descriptorRow(const FunctionDefinition& f, const LoweredFunction& lowered) {
+  const std::string prefix = "rd_" + f.name;
+  const std::uint64_t t = lowered.transfer_slots;
+  const std::uint64_t staged = static_cast<std::uint64_t>(f.inputCount()) + f.outputCount();
+  std::ostringstream row;
+  row << "  {" << cString(f.name) << ", " << f.inputs.size() << "u, " << (f.inputs.empty() ? "NULL" : prefix + "_inputs")
+      << ", " << f.outputs.size() << "u, " << prefix << "_outputs, " << t << "u, "
+      << "RD_VECTOR ? (uint64_t)RD_W * " << (t + staged) << "u : " << t << "u, RD_W, " << prefix << "_eval, " << prefix
+      << "_eval_batch},\n";
+  return row.str();
+}
+
+}  // namespace
+
 GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector<FunctionDefinition>& functions,
                                  const CodegenOptions& options) {
   if (functions.empty()) throw std::invalid_argument("generateLibrary: no functions");
@@ -131,6 +233,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     if (!names.insert(f.name).second) throw std::invalid_argument("generateLibrary: two functions named '" + f.name + "'");
   }
   const std::string head = detail::prologue(options);
+  const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
   GeneratedLibrary lib;
   lib.headers.push_back({"robodiff/codegen/abi.h", abiHeaderText()});
   lib.headers.push_back({"robodiff/codegen/sincos_kernel.h", sincosKernelText()});
@@ -138,88 +241,15 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
   main << head;
   std::ostringstream table;
   table << "static const robodiff_function_desc rd_functions[] = {\n";
-
   for (const auto& f : functions) {
-    const Lowerings lowerings = lowerForC(graph, f, options);
-    const LoweredFunction& lowered = lowerings.plain;
-    const LoweredFunction& paired = lowerings.paired;
-    const bool compact = lowerings.compact;
-    const std::string prefix = "rd_" + f.name;
-    const std::uint32_t parts = static_cast<std::uint32_t>(lowered.chunks.size());
-
-    GeneratedFunctionInfo info;
-    info.name = f.name;
-    info.needed_nodes = lowered.needed_nodes;
-    info.operations = lowered.operations;
-    info.sincos_pairs = lowered.sincos_pairs;
-    info.parts = parts;
-    info.transfer_slots = lowered.transfer_slots;
-    info.lane_pairs = paired.lane_pairs;
-    for (const Chunk& c : lowered.chunks) info.max_locals = std::max(info.max_locals, c.slots);
-    lib.functions.push_back(info);
-
-    ChunkPrinter scalar(f, Flavour::Scalar), vector(f, Flavour::Vector);
-    // The single-knot code of part p: with lane pairs (and sin-cos pairs) where the
-    // compiler has vector types.
-    const bool any_pairs = paired.lane_pairs > 0 || paired.sincos_lane_pairs > 0;
-    auto scalarPart = [&](const std::string& signature, std::uint32_t p) {
-      const std::string table = compact ? prefix + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
-      if (!any_pairs) return scalar.print(signature, lowered.chunks[p], false, table);
-      return "#if RD_PAIRS\n" + scalar.print(signature, paired.chunks[p], false, table) + "#else\n" +
-             scalar.print(signature, lowered.chunks[p], false, table) + "#endif\n";
-    };
-    const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
-    main << "/* ---- " << f.name << ": " << lowered.operations << " operations, " << parts << " part(s) ---- */\n\n";
-    const bool checked_at_entry = parts == 1 && !compact && any_pairs && !lowered.sincos_inputs.empty() &&
-                                  lowered.operations < kEntryRangeCheckBelow;
-    if (checked_at_entry) {
-      ChunkPrinter in_range(f, Flavour::Scalar);
-      in_range.inRangeKernels(true);
-      main << "#if RD_PAIRS\n"
-           << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
-                             paired.chunks[0])
-           << scalar.print("RD_SCALAR_FN RD_COLD static void " + prefix + "_exact" + kEvalParams, lowered.chunks[0])
-           << detail::rangeCheckedEntry(prefix, lowered.sincos_inputs) << "#else\n"
-           << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0])
-           << "#endif\n\n";
-    } else if (parts == 1) {
-      main << scalarPart("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, 0) << "\n";
-    }
-    if (parts == 1) {
-      if (batched)
-        main << "#if RD_VECTOR\n" << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
-             << "#endif\n\n";
-    } else {
-      for (std::uint32_t p = 0; p < parts; ++p) {
-        const std::string part = prefix + "_p" + std::to_string(p);
-        std::ostringstream file;
-        file << head << "RD_HIDDEN void " << part << kEvalParams << ";\n"
-             << scalarPart("RD_SCALAR_FN RD_SCALAR_PART RD_HIDDEN void " + part + kEvalParams, p)
-             << "\n";
-        if (batched)
-          file << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n"
-               << vector.print("RD_HIDDEN void " + part + "_v" + kEvalParams, lowered.chunks[p], p == 0) << "#endif\n";
-        lib.sources.push_back({f.name + "_part" + std::to_string(p) + ".c", file.str()});
-        main << "RD_HIDDEN void " << part << kEvalParams << ";\n";
-        if (batched) main << "#if RD_VECTOR\nRD_HIDDEN void " << part << "_v" << kEvalParams << ";\n#endif\n";
-      }
-      main << "\nstatic void " << prefix << "_eval" << kEvalParams << " {\n";
-      for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "(in, out, w);\n";
-      main << "}\n\n";
-      if (batched) {
-        main << "#if RD_VECTOR\nstatic void " << prefix << "_chunk" << kEvalParams << " {\n";
-        for (std::uint32_t p = 0; p < parts; ++p) main << "  " << prefix << "_p" << p << "_v(in, out, w);\n";
-        main << "}\n#endif\n\n";
-      }
-    }
-    main << batchEntry(f, prefix, lowered.transfer_slots) << descriptorTables(f, prefix);
-
-    const std::uint64_t t = lowered.transfer_slots;
-    const std::uint64_t staged = static_cast<std::uint64_t>(f.inputCount()) + f.outputCount();
-    table << "  {" << cString(f.name) << ", " << f.inputs.size() << "u, " << (f.inputs.empty() ? "NULL" : prefix + "_inputs")
-          << ", " << f.outputs.size() << "u, " << prefix << "_outputs, " << t << "u, "
-          << "RD_VECTOR ? (uint64_t)RD_W * " << (t + staged) << "u : " << t << "u, RD_W, " << prefix << "_eval, "
-          << prefix << "_eval_batch},\n";
+    const Lowerings l = lowerForC(graph, f, options);
+    lib.functions.push_back(functionInfo(f, l));
+    const std::size_t parts = l.plain.chunks.size();
+    main << "/* ---- " << f.name << ": " << l.plain.operations << " operations, " << parts << " part(s) ---- */\n\n";
+    if (parts == 1) emitWhole(f, l, batched, main);
+    else emitParts(f, l, batched, head, lib, main);
+    main << batchEntry(f, "rd_" + f.name, l.plain.transfer_slots) << descriptorTables(f, "rd_" + f.name);
+    table << descriptorRow(f, l.plain);
   }
   table << "};\n\n"
         << "RD_EXPORT const robodiff_library_desc robodiff_library = {\n"
