@@ -213,19 +213,21 @@ void writeTrajectoryOutput(const std::filesystem::path& path, const TrajectoryOu
   }
 }
 
-TrajectoryOutput readTrajectoryBinary(const std::filesystem::path& path) {
-  const std::string where = path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw TrajectoryError(where + ": cannot open the file");
+namespace {
+
+// The JSON header after a binary file's preamble (its magic, then the header's length),
+// checked to be robodiff-trajectory version 1 in float64 little-endian. `length`: the
+// header's bytes.
+json readBinaryHeader(std::ifstream& in, const std::string& where, std::uint64_t file_size, std::uint64_t* length) {
   char preamble[kPreamble];
   if (!in.read(preamble, kPreamble) || std::memcmp(preamble, kMagic, sizeof kMagic) != 0)
     throw TrajectoryError(where + ": not a robodiff trajectory file (no RDTRAJ01 magic)");
-  std::uint64_t length = 0;
-  for (int i = 0; i < 8; ++i) length |= std::uint64_t{static_cast<unsigned char>(preamble[8 + i])} << (8 * i);
-  const std::uint64_t file_size = std::filesystem::file_size(path);
-  if (length > file_size - kPreamble) throw TrajectoryError(where + ": the header length " + std::to_string(length) + " is past the end of the file");
-  std::string text(length, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(length));
+  *length = 0;
+  for (int i = 0; i < 8; ++i) *length |= std::uint64_t{static_cast<unsigned char>(preamble[8 + i])} << (8 * i);
+  if (*length > file_size - kPreamble)
+    throw TrajectoryError(where + ": the header length " + std::to_string(*length) + " is past the end of the file");
+  std::string text(*length, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(*length));
   json header;
   try {
     header = json::parse(text);
@@ -237,45 +239,34 @@ TrajectoryOutput readTrajectoryBinary(const std::filesystem::path& path) {
   if (header.value("dtype", "") != "float64" || header.value("byte_order", "") != "little")
     throw TrajectoryError(where + ": dtype " + header.value("dtype", "?") + ", byte order " +
                           header.value("byte_order", "?") + ": only float64 little-endian is known");
-  TrajectoryOutput output;
-  output.function = header.value("function", "");
-  output.model = header.value("model", "");
-  if (header.contains("spec")) output.spec_json = header["spec"].dump();
-  const bool has_time = header.value("has_time", false);
-  const std::size_t shift = has_time ? 1 : 0;
-  const std::uint32_t stride = u32(header, "row_stride", where);
-  if (!header.contains("knots") || !header["knots"].is_number_unsigned())
-    throw TrajectoryError(where + ": \"knots\" is missing or not a non-negative integer");
-  output.knots = header["knots"].get<std::uint64_t>();
-  const std::uint64_t data_offset = header.value("data_offset", std::uint64_t{0});
-  if (data_offset != kPreamble + length) throw TrajectoryError(where + ": data_offset does not follow the header");
-  for (const json& b : header.value("blocks", json::array())) {
-    BlockLayout block;
-    block.name = b.value("name", "");
-    const std::string at = where + ": block " + block.name;
-    block.rows = u32(b, "rows", at);
-    block.cols = u32(b, "cols", at);
-    block.size = u32(b, "size", at);
-    block.offset = u32(b, "offset", at);
-    if (block.offset < shift) throw TrajectoryError(at + ": offset 0 is the time column's");
-    block.offset -= static_cast<std::uint32_t>(shift);
-    block.sparse = b.value("layout", "dense") == "csr";
-    if (block.sparse) {
-      block.row_ptr = b.at("row_ptr").get<std::vector<std::uint32_t>>();
-      block.col_idx = b.at("col_idx").get<std::vector<std::uint32_t>>();
-    }
-    if (block.offset + shift + block.size > stride) throw TrajectoryError(at + ": past the end of a row");
-    output.output_count = std::max<std::size_t>(output.output_count, block.offset + block.size);
-    output.blocks.push_back(std::move(block));
+  return header;
+}
+
+// One of the header's "blocks", its offset counted from the first output (after the
+// time column, `shift` 1, when there is one); within a row of `stride` doubles.
+BlockLayout blockOf(const json& b, const std::string& where, std::size_t shift, std::uint32_t stride) {
+  BlockLayout block;
+  block.name = b.value("name", "");
+  const std::string at = where + ": block " + block.name;
+  block.rows = u32(b, "rows", at);
+  block.cols = u32(b, "cols", at);
+  block.size = u32(b, "size", at);
+  block.offset = u32(b, "offset", at);
+  if (block.offset < shift) throw TrajectoryError(at + ": offset 0 is the time column's");
+  block.offset -= static_cast<std::uint32_t>(shift);
+  block.sparse = b.value("layout", "dense") == "csr";
+  if (block.sparse) {
+    block.row_ptr = b.at("row_ptr").get<std::vector<std::uint32_t>>();
+    block.col_idx = b.at("col_idx").get<std::vector<std::uint32_t>>();
   }
-  if (output.output_count + shift != stride)
-    throw TrajectoryError(where + ": the blocks cover " + std::to_string(output.output_count + shift) +
-                          " doubles of a row, row_stride is " + std::to_string(stride));
-  const std::uint64_t expected = data_offset + output.knots * stride * sizeof(double);
-  if (file_size != expected)
-    throw TrajectoryError(where + ": " + std::to_string(file_size) + " bytes, the header says " +
-                          std::to_string(expected) + " (" + std::to_string(output.knots) + " knots of " +
-                          std::to_string(stride) + " doubles)");
+  if (block.offset + shift + block.size > stride) throw TrajectoryError(at + ": past the end of a row");
+  return block;
+}
+
+// The knots' rows of `stride` doubles from `data_offset` on, into output.times (the
+// first column, with `shift` 1) and output.values.
+void readRows(std::ifstream& in, const std::string& where, std::uint64_t data_offset, std::uint32_t stride,
+              std::size_t shift, TrajectoryOutput& output) {
   std::vector<double> rows(output.knots * stride);
   in.seekg(static_cast<std::streamoff>(data_offset));
   in.read(reinterpret_cast<char*>(rows.data()), static_cast<std::streamsize>(rows.size() * sizeof(double)));
@@ -287,12 +278,47 @@ TrajectoryOutput readTrajectoryBinary(const std::filesystem::path& path) {
     }
   }
   output.values.resize(output.knots * output.output_count);
-  if (has_time) output.times.resize(output.knots);
+  if (shift) output.times.resize(output.knots);
   for (std::uint64_t k = 0; k < output.knots; ++k) {
     const double* row = rows.data() + k * stride;
-    if (has_time) output.times[k] = row[0];
+    if (shift) output.times[k] = row[0];
     std::copy_n(row + shift, output.output_count, output.values.data() + k * output.output_count);
   }
+}
+
+}  // namespace
+
+TrajectoryOutput readTrajectoryBinary(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw TrajectoryError(where + ": cannot open the file");
+  const std::uint64_t file_size = std::filesystem::file_size(path);
+  std::uint64_t length = 0;
+  const json header = readBinaryHeader(in, where, file_size, &length);
+  TrajectoryOutput output;
+  output.function = header.value("function", "");
+  output.model = header.value("model", "");
+  if (header.contains("spec")) output.spec_json = header["spec"].dump();
+  const std::size_t shift = header.value("has_time", false) ? 1 : 0;
+  const std::uint32_t stride = u32(header, "row_stride", where);
+  if (!header.contains("knots") || !header["knots"].is_number_unsigned())
+    throw TrajectoryError(where + ": \"knots\" is missing or not a non-negative integer");
+  output.knots = header["knots"].get<std::uint64_t>();
+  const std::uint64_t data_offset = header.value("data_offset", std::uint64_t{0});
+  if (data_offset != kPreamble + length) throw TrajectoryError(where + ": data_offset does not follow the header");
+  for (const json& b : header.value("blocks", json::array())) {
+    output.blocks.push_back(blockOf(b, where, shift, stride));
+    output.output_count = std::max<std::size_t>(output.output_count, output.blocks.back().offset + output.blocks.back().size);
+  }
+  if (output.output_count + shift != stride)
+    throw TrajectoryError(where + ": the blocks cover " + std::to_string(output.output_count + shift) +
+                          " doubles of a row, row_stride is " + std::to_string(stride));
+  const std::uint64_t expected = data_offset + output.knots * stride * sizeof(double);
+  if (file_size != expected)
+    throw TrajectoryError(where + ": " + std::to_string(file_size) + " bytes, the header says " +
+                          std::to_string(expected) + " (" + std::to_string(output.knots) + " knots of " +
+                          std::to_string(stride) + " doubles)");
+  readRows(in, where, data_offset, stride, shift, output);
   return output;
 }
 
