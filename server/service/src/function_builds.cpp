@@ -135,36 +135,45 @@ void FunctionBuilds::failFunction(const std::shared_ptr<FunctionEntry>& function
   f.fail(status.code, status.message);
 }
 
-void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
+bool FunctionBuilds::refusedBeforeTrace(const std::shared_ptr<FunctionEntry>& function) {
   FunctionEntry& f = *function;
   if (stopping_) {
     failFunction(function,
                  {StatusCode::Unavailable,
                   "the server stopped before function " + f.id() + " was built; retry after restart"},
                  FailureStage::Trace);
-    return;
+    return true;
   }
   if (f.unloaded()) {
     f.fail(StatusCode::Cancelled, "function " + f.id() + " was released before it was built");  // already unloaded
-    return;
+    return true;
   }
-  const Model& model = *f.model().model;
+  return false;
+}
 
+bool FunctionBuilds::servedFromCache(const std::shared_ptr<FunctionEntry>& function, std::string& key_problem) {
+  FunctionEntry& f = *function;
   // Compiling: the library may be in the cache already (built by an earlier run, or by
   // another server sharing the cache).
-  std::string key_problem;
   if (settings_.compile) {
     std::optional<cache::PreparedBuild> prepared;
     try {
-      prepared = cache::prepareBuild(model, f.model().id, f.spec(), "", settings_.compiler);
+      prepared = cache::prepareBuild(*f.model().model, f.model().id, f.spec(), "", settings_.compiler);
     } catch (const std::exception& e) {
       key_problem = e.what();  // e.g. the compiler cannot be run: the interpreter serves
     }
-    if (prepared && loadFromCache(function, prepared->key)) return;
+    if (prepared && loadFromCache(function, prepared->key)) return true;
   }
   // Built elsewhere (imported, or by another version of the compiler): found by its
   // portable key, which needs no compiler, so a server that compiles nothing serves it too.
-  if (loadPortable(function)) return;
+  return loadPortable(function);
+}
+
+void FunctionBuilds::trace(const std::shared_ptr<FunctionEntry>& function) {
+  FunctionEntry& f = *function;
+  if (refusedBeforeTrace(function)) return;
+  std::string key_problem;
+  if (servedFromCache(function, key_problem)) return;
   if (settings_.compile && key_problem.empty()) cache_misses_.fetch_add(1, std::memory_order_relaxed);
 
   // A robot host asks its build hosts at once, while it traces: a library that arrives

@@ -109,6 +109,12 @@ class FunctionBuilds {
 
  private:
   void trace(const std::shared_ptr<FunctionEntry>& function);
+  // Ends `function` without tracing when the server is stopping or it was released (true).
+  bool refusedBeforeTrace(const std::shared_ptr<FunctionEntry>& function);
+  // Serves `function` from a library built before (true): by its key, when this server
+  // compiles and the key can be made (else `key_problem` says why not), or by its
+  // portable key.
+  bool servedFromCache(const std::shared_ptr<FunctionEntry>& function, std::string& key_problem);
   // Serves `function` from a cached library (true), by its key or by its portable key
   // (built elsewhere: cache::preparePortableKey needs no compiler).
   bool loadFromCache(const std::shared_ptr<FunctionEntry>& function, const std::string& key);
