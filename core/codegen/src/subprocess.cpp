@@ -30,50 +30,56 @@ struct Running {
   Clock::time_point started;
 };
 
+// A failure to start, as `outcome` says it; returns pid -1.
+pid_t cannotStart(ProcessOutcome& outcome, std::string why) {
+  outcome.state = ProcessOutcome::State::CannotStart;
+  outcome.start_error = std::move(why);
+  return -1;
+}
+
+// The forked child: its own process group, killed with the thread that waits for it,
+// `limits`' address space, stdin from /dev/null, stdout and stderr into `out_write`;
+// then exec. Only async-signal-safe calls (the parent may have other threads): a failed
+// exec's errno goes to the parent through `report_write`.
+[[noreturn]] void execChild(const char* path, char* const* args, pid_t parent, const struct rlimit* as_limit,
+                            int devnull, int out_write, int report_write) {
+  setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
+  prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
+  if (getppid() != parent) _exit(127);  // (a worker killed before prctl took effect)
+  if (as_limit) setrlimit(RLIMIT_AS, as_limit);
+  if (devnull >= 0) dup2(devnull, 0);
+  dup2(out_write, 1);
+  dup2(out_write, 2);
+  execve(path, args, environ);
+  int e = errno;
+  (void)!write(report_write, &e, sizeof e);
+  _exit(127);
+}
+
 // Starts one process; on failure fills outcome and returns pid -1.
 pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, int* out_fd, ProcessOutcome& outcome) {
   const std::string path = findProgram(argv.at(0));
-  if (path.empty()) {
-    outcome.state = ProcessOutcome::State::CannotStart;
-    outcome.start_error = "'" + argv[0] + "' not found (not a path, and not in PATH)";
-    return -1;
-  }
-  // Everything the child needs is prepared before fork: after it, only
-  // async-signal-safe calls (the parent may have other threads).
+  if (path.empty()) return cannotStart(outcome, "'" + argv[0] + "' not found (not a path, and not in PATH)");
+  // Everything the child needs is prepared before fork.
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   int out[2], report[2];
-  if (pipe2(out, O_CLOEXEC) != 0) {
-    outcome.state = ProcessOutcome::State::CannotStart;
-    outcome.start_error = std::string("pipe: ") + std::strerror(errno);
-    return -1;
-  }
+  if (pipe2(out, O_CLOEXEC) != 0) return cannotStart(outcome, std::string("pipe: ") + std::strerror(errno));
   if (pipe2(report, O_CLOEXEC) != 0) {
-    outcome.state = ProcessOutcome::State::CannotStart;
-    outcome.start_error = std::string("pipe: ") + std::strerror(errno);
+    const int e = errno;
     close(out[0]);
     close(out[1]);
-    return -1;
+    return cannotStart(outcome, std::string("pipe: ") + std::strerror(e));
   }
   const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
   struct rlimit as_limit;
   as_limit.rlim_cur = as_limit.rlim_max = static_cast<rlim_t>(limits.address_space_bytes);
   const pid_t parent = getpid();
   const pid_t pid = fork();
-  if (pid == 0) {
-    setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
-    prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
-    if (getppid() != parent) _exit(127);  // (a worker killed before prctl took effect)
-    if (limits.address_space_bytes > 0) setrlimit(RLIMIT_AS, &as_limit);
-    if (devnull >= 0) dup2(devnull, 0);
-    dup2(out[1], 1);
-    dup2(out[1], 2);
-    execve(path.c_str(), args.data(), environ);
-    int e = errno;
-    (void)!write(report[1], &e, sizeof e);
-    _exit(127);
-  }
+  if (pid == 0)
+    execChild(path.c_str(), args.data(), parent, limits.address_space_bytes > 0 ? &as_limit : nullptr, devnull, out[1],
+              report[1]);
   const int fork_errno = errno;
   if (devnull >= 0) close(devnull);
   close(out[1]);
@@ -81,9 +87,7 @@ pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, i
   if (pid < 0) {
     close(out[0]);
     close(report[0]);
-    outcome.state = ProcessOutcome::State::CannotStart;
-    outcome.start_error = std::string("fork: ") + std::strerror(fork_errno);
-    return -1;
+    return cannotStart(outcome, std::string("fork: ") + std::strerror(fork_errno));
   }
   setpgid(pid, pid);  // also from here, so killpg works whoever runs first
   // The report pipe closes on a successful exec (CLOEXEC) or carries exec's errno.
@@ -97,9 +101,7 @@ pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, i
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
     close(out[0]);
-    outcome.state = ProcessOutcome::State::CannotStart;
-    outcome.start_error = "cannot execute '" + path + "': " + std::strerror(child_errno);
-    return -1;
+    return cannotStart(outcome, "cannot execute '" + path + "': " + std::strerror(child_errno));
   }
   fcntl(out[0], F_SETFL, fcntl(out[0], F_GETFL) | O_NONBLOCK);
   *out_fd = out[0];
