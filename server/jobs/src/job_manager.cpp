@@ -216,6 +216,67 @@ struct JobManager::Impl {
     const auto it = jobs.find(id);
     return it == jobs.end() ? nullptr : it->second;
   }
+
+  // A job's parameters, a JSON object the job kind's validation accepts with the data
+  // directories and earlier jobs' results readable (`readable`).
+  Status checkedParams(const rpc::SubmitJobRequest& request, json& params, std::vector<fs::path>& readable) const {
+    if (request.kind.empty()) return {StatusCode::InvalidArgument, "SubmitJob: the job's kind is empty"};
+    const std::string params_text = jobParamsKeepingSpecOrder(request.params_json);
+    params = params_text.empty() ? json() : json::parse(params_text);
+    if (!params.is_object())
+      return {StatusCode::InvalidArgument, "SubmitJob: params_json is not a JSON object: '" +
+                                               request.params_json.substr(0, 120) + "'"};
+    readable = options.data_dirs;
+    readable.push_back(index.resultDir("_").parent_path());  // earlier jobs' results
+    if (options.validate) return options.validate(request.kind, params.dump(), readable);
+    return {};
+  }
+
+  // Joins finished jobs' finisher threads, so that they do not pile up.
+  void joinFinished() {
+    std::lock_guard lock(mutex);
+    for (auto& [id, job] : jobs)
+      if (rpc::isFinal(job->info.state) && job->finisher.joinable()) job->finisher.join();
+  }
+
+  // The job queued in the job index.
+  Status indexQueued(const Job& job, const json& params) {
+    cache::JobRecord record;
+    record.id = job.info.job_id;
+    record.kind = job.info.kind;
+    record.state = "QUEUED";
+    record.params_json = params.dump();
+    record.owner = owner;
+    record.caller = job.caller;
+    record.submitted_ms = unixMs();
+    try {
+      index.insert(record);
+    } catch (const std::exception& e) {
+      return {StatusCode::Internal, std::string("SubmitJob: the job index refused the job: ") + e.what()};
+    }
+    return {};
+  }
+
+  // The job handed to the worker pool and listed; a full queue fails it in the index.
+  Status queue(const std::shared_ptr<Job>& job, const json& worker_request) {
+    workers::JobCallbacks callbacks;
+    Job* raw = job.get();
+    callbacks.on_start = [this, raw](pid_t) { onStart(*raw); };
+    callbacks.on_progress = [this, raw](const std::string& text) { onProgress(*raw, text); };
+    try {
+      std::lock_guard lock(mutex);  // the finisher must find the job in the table
+      const workers::JobHandle handle = pool->submit(worker_request.dump(), std::move(callbacks));
+      job->pool_id = handle.id;
+      job->done = handle.result;
+      jobs[job->info.job_id] = job;
+    } catch (const workers::QueueFull&) {
+      index.finish(job->info.job_id, "FAILED", "", "", "the job queue was full", unixMs());
+      return {StatusCode::ResourceExhausted, "SubmitJob: " + std::to_string(options.queue_capacity) +
+                                                 " jobs are already waiting; try again later"};
+    }
+    job->finisher = std::thread([this, job] { finish(*job, job->done.get()); });
+    return {};
+  }
 };
 
 JobManager::JobManager(JobManagerOptions options, Logger& log) : impl_(std::make_unique<Impl>(std::move(options), log)) {}
@@ -236,24 +297,13 @@ JobManager::~JobManager() {
 
 Status JobManager::submit(const JobCaller& caller, const rpc::SubmitJobRequest& request, rpc::SubmitJobReply& reply) {
   Impl& m = *impl_;
-  if (request.kind.empty()) return {StatusCode::InvalidArgument, "SubmitJob: the job's kind is empty"};
-  const std::string params_text = jobParamsKeepingSpecOrder(request.params_json);
-  const json params = params_text.empty() ? json() : json::parse(params_text);
-  if (!params.is_object())
-    return {StatusCode::InvalidArgument, "SubmitJob: params_json is not a JSON object: '" +
-                                             request.params_json.substr(0, 120) + "'"};
-  std::vector<fs::path> readable = m.options.data_dirs;
-  readable.push_back(m.index.resultDir("_").parent_path());  // earlier jobs' results
-  if (m.options.validate)
-    if (Status s = m.options.validate(request.kind, params.dump(), readable); !s.ok()) return s;
+  json params;
+  std::vector<fs::path> readable;
+  if (Status s = m.checkedParams(request, params, readable); !s.ok()) return s;
   json readable_json = json::array();
   for (const fs::path& dir : readable) readable_json.push_back(dir.string());
+  m.joinFinished();
 
-  {  // finished jobs' finisher threads are joined here, so they do not pile up
-    std::lock_guard lock(m.mutex);
-    for (auto& [other_id, other] : m.jobs)
-      if (rpc::isFinal(other->info.state) && other->finisher.joinable()) other->finisher.join();
-  }
   auto job = std::make_shared<Impl::Job>();
   job->info.job_id = newJobId();
   job->info.kind = request.kind;
@@ -263,46 +313,21 @@ Status JobManager::submit(const JobCaller& caller, const rpc::SubmitJobRequest& 
   std::error_code ec;
   fs::create_directories(staging, ec);
   if (ec) return {StatusCode::Internal, "cannot create the job's directory " + staging.string() + ": " + ec.message()};
-
-  cache::JobRecord record;
-  record.id = id;
-  record.kind = request.kind;
-  record.state = "QUEUED";
-  record.params_json = params.dump();
-  record.owner = m.owner;
-  record.caller = caller.name;
-  record.submitted_ms = unixMs();
-  try {
-    m.index.insert(record);
-  } catch (const std::exception& e) {
-    fs::remove_all(staging, ec);
-    return {StatusCode::Internal, std::string("SubmitJob: the job index refused the job: ") + e.what()};
+  Status queued = m.indexQueued(*job, params);
+  if (queued.ok()) {
+    const json worker_request = {{"type", "batch"},
+                                 {"request",
+                                  {{"kind", request.kind},
+                                   {"params", params},
+                                   {"result_dir", staging.string()},
+                                   {"readable_dirs", readable_json},
+                                   {"cache_dir", m.options.cache_dir.string()}}}};
+    queued = m.queue(job, worker_request);
   }
-
-  const json worker_request = {{"type", "batch"},
-                               {"request",
-                                {{"kind", request.kind},
-                                 {"params", params},
-                                 {"result_dir", staging.string()},
-                                 {"readable_dirs", readable_json},
-                                 {"cache_dir", m.options.cache_dir.string()}}}};
-  workers::JobCallbacks callbacks;
-  Impl::Job* raw = job.get();
-  callbacks.on_start = [&m, raw](pid_t) { m.onStart(*raw); };
-  callbacks.on_progress = [&m, raw](const std::string& text) { m.onProgress(*raw, text); };
-  try {
-    std::lock_guard lock(m.mutex);  // the finisher must find the job in the table
-    const workers::JobHandle handle = m.pool->submit(worker_request.dump(), std::move(callbacks));
-    job->pool_id = handle.id;
-    job->done = handle.result;
-    m.jobs[id] = job;
-  } catch (const workers::QueueFull&) {
-    m.index.finish(id, "FAILED", "", "", "the job queue was full", unixMs());
+  if (!queued.ok()) {
     fs::remove_all(staging, ec);
-    return {StatusCode::ResourceExhausted, "SubmitJob: " + std::to_string(m.options.queue_capacity) +
-                                               " jobs are already waiting; try again later"};
+    return queued;
   }
-  job->finisher = std::thread([&m, job] { m.finish(*job, job->done.get()); });
   m.log.info("job_submitted", {{"job", id}, {"kind", request.kind}, {"caller", caller.name}});
   reply.job_id = id;
   return {};
