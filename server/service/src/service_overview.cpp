@@ -44,6 +44,64 @@ const char* phaseOf(const detail::FunctionEntry& f) {
   return "interpreted";
 }
 
+// A loaded model as the dashboard lists it.
+ServiceOverview::Model modelRow(const detail::Registry::ModelView& view) {
+  const detail::ModelEntry& m = *view.model;
+  ServiceOverview::Model out;
+  out.id = m.id;
+  out.name = m.displayName();
+  out.floating_base = m.floating_base;
+  out.nq = static_cast<std::uint32_t>(m.model->nq);
+  out.nv = static_cast<std::uint32_t>(m.model->nv);
+  out.joints = static_cast<std::uint32_t>(m.joint_names.size());
+  out.frames = static_cast<std::uint32_t>(m.frame_names.size());
+  out.references = view.references;
+  out.functions = view.functions;
+  return out;
+}
+
+// A loaded function as the dashboard lists it: its phase, its evaluations' figures and
+// how long it took to build.
+ServiceOverview::Function functionRow(const detail::Registry::FunctionView& view) {
+  const detail::FunctionEntry& f = *view.function;
+  ServiceOverview::Function out;
+  out.id = f.id();
+  out.model_id = f.model().id;
+  out.model_name = f.model().displayName();
+  out.function = f.functionName();
+  out.outputs = describeOutputs(f.spec());
+  out.phase = phaseOf(f);
+  out.message = f.message();
+  out.references = view.references;
+  out.evaluations = f.evaluations();
+  const detail::EvaluationFigures e = f.evaluationFigures();
+  out.calls = e.calls;
+  out.p50_ns = e.p50_ns;
+  out.p99_ns = e.p99_ns;
+  out.max_ns = e.max_ns;
+  out.batch_calls = e.batch_calls;
+  out.batch_knots = e.batch_knots;
+  out.batch_ns = e.batch_ns;
+  const detail::BuildTimes t = f.buildTimes();
+  out.trace_seconds = t.trace_seconds;
+  out.compile_seconds = t.compile_seconds;
+  out.from_cache = t.from_cache;
+  return out;
+}
+
+// A recent failed build as the dashboard lists it.
+ServiceOverview::BuildFailure failureRow(const detail::BuildFailureRecord& r) {
+  ServiceOverview::BuildFailure out;
+  out.unix_seconds = std::chrono::duration<double>(r.when.time_since_epoch()).count();
+  out.function_id = r.function_id;
+  out.model = r.model;
+  out.function = r.function;
+  out.message = r.message;
+  out.stage = detail::toString(r.stage);
+  out.interpreter_serves = r.interpreter_serves();
+  return out;
+}
+
 }  // namespace
 
 std::vector<ServiceOverview::MethodLatency> Service::requestLatencies() const {
@@ -63,61 +121,9 @@ ServiceOverview Service::overview(std::size_t max_jobs) const {
   o.metrics = metrics();
   o.methods = s.stats.methods();
   o.latencies = requestLatencies();
-
-  for (const detail::Registry::ModelView& view : s.registry.modelViews()) {
-    const detail::ModelEntry& m = *view.model;
-    ServiceOverview::Model out;
-    out.id = m.id;
-    out.name = m.displayName();
-    out.floating_base = m.floating_base;
-    out.nq = static_cast<std::uint32_t>(m.model->nq);
-    out.nv = static_cast<std::uint32_t>(m.model->nv);
-    out.joints = static_cast<std::uint32_t>(m.joint_names.size());
-    out.frames = static_cast<std::uint32_t>(m.frame_names.size());
-    out.references = view.references;
-    out.functions = view.functions;
-    o.models.push_back(std::move(out));
-  }
-
-  for (const detail::Registry::FunctionView& view : s.registry.functionViews()) {
-    const detail::FunctionEntry& f = *view.function;
-    ServiceOverview::Function out;
-    out.id = f.id();
-    out.model_id = f.model().id;
-    out.model_name = f.model().displayName();
-    out.function = f.functionName();
-    out.outputs = describeOutputs(f.spec());
-    out.phase = phaseOf(f);
-    out.message = f.message();
-    out.references = view.references;
-    out.evaluations = f.evaluations();
-    const detail::EvaluationFigures e = f.evaluationFigures();
-    out.calls = e.calls;
-    out.p50_ns = e.p50_ns;
-    out.p99_ns = e.p99_ns;
-    out.max_ns = e.max_ns;
-    out.batch_calls = e.batch_calls;
-    out.batch_knots = e.batch_knots;
-    out.batch_ns = e.batch_ns;
-    const detail::BuildTimes t = f.buildTimes();
-    out.trace_seconds = t.trace_seconds;
-    out.compile_seconds = t.compile_seconds;
-    out.from_cache = t.from_cache;
-    o.functions.push_back(std::move(out));
-  }
-
-  for (const detail::BuildFailureRecord& r : s.builds.recentFailures()) {
-    ServiceOverview::BuildFailure out;
-    out.unix_seconds = std::chrono::duration<double>(r.when.time_since_epoch()).count();
-    out.function_id = r.function_id;
-    out.model = r.model;
-    out.function = r.function;
-    out.message = r.message;
-    out.stage = detail::toString(r.stage);
-    out.interpreter_serves = r.interpreter_serves();
-    o.build_failures.push_back(std::move(out));
-  }
-
+  for (const detail::Registry::ModelView& view : s.registry.modelViews()) o.models.push_back(modelRow(view));
+  for (const detail::Registry::FunctionView& view : s.registry.functionViews()) o.functions.push_back(functionRow(view));
+  for (const detail::BuildFailureRecord& r : s.builds.recentFailures()) o.build_failures.push_back(failureRow(r));
   if (s.jobs) {
     try {
       o.jobs = s.jobs->recent(max_jobs);
