@@ -44,8 +44,40 @@ std::string describeWorkerExit(pid_t pid, int status) {
   return who + " ended during the job";
 }
 
-WorkerProcess startWorkerProcess(const fs::path& executable) {
-  int to[2], from[2], report[2];
+namespace {
+
+// The forked worker: its own session (and process group), apart from the terminal's
+// signals, so that every process it starts carries the session id even once orphaned
+// (process_tree.hpp); killed with the pool's supervisor thread; default signal handling;
+// stdin and stdout the pool's pipes, no other descriptor of the pool's process but
+// `report_write`, where a failed exec's errno goes. Only async-signal-safe calls (the
+// pool has other threads).
+[[noreturn]] void execWorker(const char* path, char* const* argv, pid_t parent, long max_fd, int to_read,
+                             int from_write, int report_write) {
+  sigset_t no_signals;
+  sigemptyset(&no_signals);
+  struct sigaction default_action {};
+  default_action.sa_handler = SIG_DFL;
+  ::setsid();
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // dies with the pool's supervisor thread
+  if (::getppid() != parent) ::_exit(127);  // the pool died before prctl took effect
+  for (int sig : {SIGPIPE, SIGINT, SIGTERM, SIGHUP, SIGQUIT}) ::sigaction(sig, &default_action, nullptr);
+  ::sigprocmask(SIG_SETMASK, &no_signals, nullptr);  // the supervisor blocks SIGPIPE
+  ::dup2(to_read, 0);
+  ::dup2(from_write, 1);
+  const auto keep = static_cast<unsigned>(report_write);  // closes on exec
+  if ((keep > 3 && ::close_range(3, keep - 1, 0) != 0) || ::close_range(keep + 1, ~0U, 0) != 0) {
+    for (int fd = 3; fd < max_fd; ++fd)
+      if (fd != report_write) ::close(fd);
+  }
+  ::execv(path, argv);
+  const int e = errno;
+  (void)!::write(report_write, &e, sizeof e);
+  ::_exit(127);
+}
+
+// Three pipes (to the worker, from it, and its exec report), each end close-on-exec.
+void openPipes(int to[2], int from[2], int report[2]) {
   if (::pipe2(to, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
   if (::pipe2(from, O_CLOEXEC) != 0) {
     const int e = errno;
@@ -57,38 +89,20 @@ WorkerProcess startWorkerProcess(const fs::path& executable) {
     ::close(to[0]), ::close(to[1]), ::close(from[0]), ::close(from[1]);
     throw std::runtime_error(std::string("pipe: ") + std::strerror(e));
   }
-  // Prepared before fork: in the child only async-signal-safe calls (other threads).
+}
+
+}  // namespace
+
+WorkerProcess startWorkerProcess(const fs::path& executable) {
+  int to[2], from[2], report[2];
+  openPipes(to, from, report);
+  // Prepared before fork: in the child only async-signal-safe calls.
   const std::string path = executable.string();
   char* const argv[] = {const_cast<char*>(path.c_str()), nullptr};
   const pid_t parent = ::getpid();
   const long max_fd = std::min<long>(::sysconf(_SC_OPEN_MAX) > 0 ? ::sysconf(_SC_OPEN_MAX) : 1024, 65536);
-  sigset_t no_signals;
-  sigemptyset(&no_signals);
-  struct sigaction default_action {};
-  default_action.sa_handler = SIG_DFL;
-
   const pid_t pid = ::fork();
-  if (pid == 0) {
-    // Its own session (and process group): apart from the terminal's signals, and every
-    // process it starts carries the session id even once orphaned (process_tree.hpp).
-    ::setsid();
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // dies with the pool's supervisor thread
-    if (::getppid() != parent) ::_exit(127);  // the pool died before prctl took effect
-    for (int sig : {SIGPIPE, SIGINT, SIGTERM, SIGHUP, SIGQUIT}) ::sigaction(sig, &default_action, nullptr);
-    ::sigprocmask(SIG_SETMASK, &no_signals, nullptr);  // the supervisor blocks SIGPIPE
-    ::dup2(to[0], 0);
-    ::dup2(from[1], 1);
-    // Nothing else of the pool's process leaks into the worker (report closes on exec).
-    const auto keep = static_cast<unsigned>(report[1]);
-    if ((keep > 3 && ::close_range(3, keep - 1, 0) != 0) || ::close_range(keep + 1, ~0U, 0) != 0) {
-    for (int fd = 3; fd < max_fd; ++fd)
-      if (fd != report[1]) ::close(fd);
-    }
-    ::execv(path.c_str(), argv);
-    const int e = errno;
-    (void)!::write(report[1], &e, sizeof e);
-    ::_exit(127);
-  }
+  if (pid == 0) execWorker(path.c_str(), argv, parent, max_fd, to[0], from[1], report[1]);
   const int fork_errno = errno;
   ::close(to[0]);
   ::close(from[1]);
