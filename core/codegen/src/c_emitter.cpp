@@ -135,13 +135,16 @@ GeneratedFunctionInfo functionInfo(const FunctionDefinition& f, const Lowerings&
   return info;
 }
 
+// The C names of a function's pieces start with this (rd_<name>_eval, rd_<name>_p0, ...).
+std::string prefixOf(const FunctionDefinition& f) { return "rd_" + f.name; }
+
 bool anyPairs(const Lowerings& l) { return l.paired.lane_pairs > 0 || l.paired.sincos_lane_pairs > 0; }
 
 // The single-knot code of part p: with lane pairs (and sin-cos pairs) where the compiler
 // has vector types.
 std::string scalarPart(const FunctionDefinition& f, const Lowerings& l, const std::string& signature, std::uint32_t p) {
   const std::uint32_t parts = static_cast<std::uint32_t>(l.plain.chunks.size());
-  const std::string table = l.compact ? "rd_" + f.name + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
+  const std::string table = l.compact ? prefixOf(f) + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
   ChunkPrinter scalar(f, Flavour::Scalar);
   if (!anyPairs(l)) return scalar.print(signature, l.plain.chunks[p], false, table);
   return "#if RD_PAIRS\n" + scalar.print(signature, l.paired.chunks[p], false, table) + "#else\n" +
@@ -152,13 +155,12 @@ std::string scalarPart(const FunctionDefinition& f, const Lowerings& l, const st
 // range checked at entry where that pays (a cold exact copy beside it), and its batched
 // chunk.
 void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, std::ostream& main) {
-  const std::string prefix = "rd_" + f.name;
+  const std::string prefix = prefixOf(f);
   const LoweredFunction& lowered = l.plain;
   const bool checked_at_entry = !l.compact && anyPairs(l) && !lowered.sincos_inputs.empty() &&
                                 lowered.operations < kEntryRangeCheckBelow;
-  ChunkPrinter scalar(f, Flavour::Scalar);
   if (checked_at_entry) {
-    ChunkPrinter in_range(f, Flavour::Scalar);
+    ChunkPrinter scalar(f, Flavour::Scalar), in_range(f, Flavour::Scalar);
     in_range.inRangeKernels(true);
     main << "#if RD_PAIRS\n"
          << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
@@ -181,7 +183,7 @@ void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, st
 // and called there in order by the function's entry points.
 void emitParts(const FunctionDefinition& f, const Lowerings& l, bool batched, const std::string& head,
                GeneratedLibrary& lib, std::ostream& main) {
-  const std::string prefix = "rd_" + f.name;
+  const std::string prefix = prefixOf(f);
   const std::uint32_t parts = static_cast<std::uint32_t>(l.plain.chunks.size());
   ChunkPrinter vector(f, Flavour::Vector);
   for (std::uint32_t p = 0; p < parts; ++p) {
@@ -208,7 +210,7 @@ void emitParts(const FunctionDefinition& f, const Lowerings& l, bool batched, co
 
 // The function's row of the library's descriptor table.
 std::string descriptorRow(const FunctionDefinition& f, const LoweredFunction& lowered) {
-  const std::string prefix = "rd_" + f.name;
+  const std::string prefix = prefixOf(f);
   const std::uint64_t t = lowered.transfer_slots;
   const std::uint64_t staged = static_cast<std::uint64_t>(f.inputCount()) + f.outputCount();
   std::ostringstream row;
@@ -248,7 +250,7 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     main << "/* ---- " << f.name << ": " << l.plain.operations << " operations, " << parts << " part(s) ---- */\n\n";
     if (parts == 1) emitWhole(f, l, batched, main);
     else emitParts(f, l, batched, head, lib, main);
-    main << batchEntry(f, "rd_" + f.name, l.plain.transfer_slots) << descriptorTables(f, "rd_" + f.name);
+    main << batchEntry(f, prefixOf(f), l.plain.transfer_slots) << descriptorTables(f, prefixOf(f));
     table << descriptorRow(f, l.plain);
   }
   table << "};\n\n"
