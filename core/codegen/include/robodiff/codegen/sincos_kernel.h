@@ -24,9 +24,11 @@
 #ifndef ROBODIFF_CODEGEN_SINCOS_KERNEL_H
 #define ROBODIFF_CODEGEN_SINCOS_KERNEL_H
 
+#ifndef RD_LIBC_DECLARED /* generated C declares sincos, fabs and memcpy itself */
 #include <math.h>
-#include <stdint.h>
 #include <string.h>
+#endif
+#include <stdint.h>
 
 #define RD_SC_TWO_OVER_PI 0x1.45f306dc9c883p-1
 #define RD_SC_ROUNDER 0x1.8p52
