@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "robodiff/process/program_path.hpp"
 #include "process_tree.hpp"
 #include "worker_records.hpp"
 #include "worker_process.hpp"
@@ -472,7 +473,7 @@ WorkerPool::WorkerPool(WorkerPoolOptions options) : impl_(std::make_unique<Impl>
   if (impl_->executable.empty())
     throw std::runtime_error("cannot find robodiff-worker: it is neither beside the running program, nor in "
                              ROBODIFF_WORKER_FROM_BINDIR " from it, nor in PATH");
-  if (!isExecutableFile(impl_->executable))
+  if (!process::isExecutableFile(impl_->executable))
     throw std::runtime_error("the worker program " + impl_->executable.string() + " is not an executable file");
   impl_->options = std::move(options);
 

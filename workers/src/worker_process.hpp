@@ -32,8 +32,6 @@ WorkerProcess startWorkerProcess(const std::filesystem::path& executable);
 // "worker 123 was killed by signal 9 (SIGKILL) during the job", or its exit status.
 std::string describeWorkerExit(pid_t pid, int status);
 
-bool isExecutableFile(const std::filesystem::path& path);
-
 // The pipes to and from a worker.
 void setNonBlocking(int fd);
 void closeFd(int& fd);  // closes it (when open) and marks it closed (-1)

@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <ctime>
 #include <fstream>
@@ -16,6 +18,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "robodiff/process/program_path.hpp"
+#include "robodiff/process/spawn.hpp"
 #include "robodiff/schema/dds_partitions.hpp"
 
 namespace robodiff::client {
@@ -37,30 +41,33 @@ void writeFile(const fs::path& path, const std::string& text) {
   if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
 }
 
+// The openssl child: keys it writes readable by nobody else, not even for a moment;
+// stdout and stderr into the log the parent opened (async-signal-safe calls only).
+void setUpOpenssl(const void* context, int /*report_fd*/) {
+  const int log_fd = *static_cast<const int*>(context);
+  umask(077);
+  dup2(log_fd, 1);
+  dup2(log_fd, 2);
+}
+
 // Runs `openssl args...` with its output in `log`; throws with that output on failure.
 void openssl(const std::vector<std::string>& args, const fs::path& log, std::string_view step) {
-  std::vector<char*> argv{const_cast<char*>("openssl")};
+  const std::string program = process::findProgram("openssl");
+  if (program.empty())
+    throw std::runtime_error(std::string(step) + ": the openssl command was not found in PATH (apt-get install openssl)");
+  std::vector<char*> argv{const_cast<char*>(program.c_str())};
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error(std::string(step) + ": fork failed");
-  if (pid == 0) {
-    umask(077);  // keys are never readable by others, not even for a moment
-    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    if (fd >= 0) {
-      dup2(fd, 1);
-      dup2(fd, 2);
-    }
-    execvp("openssl", argv.data());
-    _exit(127);
-  }
+  const int log_fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (log_fd < 0) throw std::runtime_error(std::string(step) + ": cannot write " + log.string() + ": " + std::strerror(errno));
+  const process::Spawned child = process::spawn(program.c_str(), argv.data(), setUpOpenssl, &log_fd);
+  close(log_fd);
+  if (!child.ok()) throw std::runtime_error(std::string(step) + ": " + child.error);
   int status = 0;
-  waitpid(pid, &status, 0);
+  while (waitpid(child.pid, &status, 0) < 0 && errno == EINTR) {
+  }
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
-  const std::string output = slurp(log);
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
-    throw std::runtime_error(std::string(step) + ": the openssl command was not found (apt-get install openssl)");
-  throw std::runtime_error(std::string(step) + ": openssl failed: " + output.substr(0, 2000));
+  throw std::runtime_error(std::string(step) + ": openssl failed: " + slurp(log).substr(0, 2000));
 }
 
 void newKey(const fs::path& key, const fs::path& log) {

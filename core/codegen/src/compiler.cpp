@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "robodiff/process/program_path.hpp"
 #include "subprocess.hpp"
 
 namespace robodiff::codegen {
@@ -137,7 +138,7 @@ std::string resolveCompiler(const CompilerOptions& options) {
     throw CompileError(CompileError::Kind::CannotRun,
                        "the compiler '" + program +
                            "' has arguments: give one program (flags come from CompilerOptions only)");
-  const std::string path = detail::findProgram(program);
+  const std::string path = process::findProgram(program);
   if (path.empty())
     throw CompileError(CompileError::Kind::CannotRun, "cannot run the compiler: '" + program + "' not found (not a path, and not in PATH)");
   return path;

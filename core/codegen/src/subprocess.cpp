@@ -5,17 +5,16 @@
 #include <sys/prctl.h>
 #include <signal.h>
 #include <sys/resource.h>
-#include <sys/stat.h>
 #include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
 
-extern char** environ;
+#include "robodiff/process/program_path.hpp"
+#include "robodiff/process/spawn.hpp"
 
 namespace robodiff::codegen::detail {
 namespace {
@@ -37,75 +36,51 @@ pid_t cannotStart(ProcessOutcome& outcome, std::string why) {
   return -1;
 }
 
-// The forked child: its own process group, killed with the thread that waits for it,
-// `limits`' address space, stdin from /dev/null, stdout and stderr into `out_write`;
-// then exec. Only async-signal-safe calls (the parent may have other threads): a failed
-// exec's errno goes to the parent through `report_write`.
-[[noreturn]] void execChild(const char* path, char* const* args, pid_t parent, const struct rlimit* as_limit,
-                            int devnull, int out_write, int report_write) {
+// What the forked compiler's child sets up before exec (async-signal-safe calls only).
+struct CompilerChild {
+  pid_t parent;
+  const struct rlimit* as_limit;  // null: no limit
+  int devnull;                    // stdin; -1: left as it is
+  int out_write;                  // stdout and stderr
+};
+
+// Its own process group, killed with the thread that waits for it, `as_limit`'s
+// address space, stdin from /dev/null, stdout and stderr into the output pipe.
+void setUpChild(const void* context, int /*report_fd*/) {
+  const auto& c = *static_cast<const CompilerChild*>(context);
   setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
   prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
-  if (getppid() != parent) _exit(127);  // (a worker killed before prctl took effect)
-  if (as_limit) setrlimit(RLIMIT_AS, as_limit);
-  if (devnull >= 0) dup2(devnull, 0);
-  dup2(out_write, 1);
-  dup2(out_write, 2);
-  execve(path, args, environ);
-  int e = errno;
-  (void)!write(report_write, &e, sizeof e);
-  _exit(127);
+  if (getppid() != c.parent) _exit(127);  // (a worker killed before prctl took effect)
+  if (c.as_limit) setrlimit(RLIMIT_AS, c.as_limit);
+  if (c.devnull >= 0) dup2(c.devnull, 0);
+  dup2(c.out_write, 1);
+  dup2(c.out_write, 2);
 }
 
 // Starts one process; on failure fills outcome and returns pid -1.
 pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, int* out_fd, ProcessOutcome& outcome) {
-  const std::string path = findProgram(argv.at(0));
+  const std::string path = process::findProgram(argv.at(0));
   if (path.empty()) return cannotStart(outcome, "'" + argv[0] + "' not found (not a path, and not in PATH)");
   // Everything the child needs is prepared before fork.
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  int out[2], report[2];
+  int out[2];
   if (pipe2(out, O_CLOEXEC) != 0) return cannotStart(outcome, std::string("pipe: ") + std::strerror(errno));
-  if (pipe2(report, O_CLOEXEC) != 0) {
-    const int e = errno;
-    close(out[0]);
-    close(out[1]);
-    return cannotStart(outcome, std::string("pipe: ") + std::strerror(e));
-  }
   const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
   struct rlimit as_limit;
   as_limit.rlim_cur = as_limit.rlim_max = static_cast<rlim_t>(limits.address_space_bytes);
-  const pid_t parent = getpid();
-  const pid_t pid = fork();
-  if (pid == 0)
-    execChild(path.c_str(), args.data(), parent, limits.address_space_bytes > 0 ? &as_limit : nullptr, devnull, out[1],
-              report[1]);
-  const int fork_errno = errno;
+  const CompilerChild setup{getpid(), limits.address_space_bytes > 0 ? &as_limit : nullptr, devnull, out[1]};
+  const process::Spawned child = process::spawn(path.c_str(), args.data(), setUpChild, &setup);
   if (devnull >= 0) close(devnull);
   close(out[1]);
-  close(report[1]);
-  if (pid < 0) {
+  if (!child.ok()) {
     close(out[0]);
-    close(report[0]);
-    return cannotStart(outcome, std::string("fork: ") + std::strerror(fork_errno));
-  }
-  setpgid(pid, pid);  // also from here, so killpg works whoever runs first
-  // The report pipe closes on a successful exec (CLOEXEC) or carries exec's errno.
-  int child_errno = 0;
-  ssize_t got;
-  do got = read(report[0], &child_errno, sizeof child_errno);
-  while (got < 0 && errno == EINTR);
-  close(report[0]);
-  if (got == static_cast<ssize_t>(sizeof child_errno)) {
-    int status;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    close(out[0]);
-    return cannotStart(outcome, "cannot execute '" + path + "': " + std::strerror(child_errno));
+    return cannotStart(outcome, child.error);
   }
   fcntl(out[0], F_SETFL, fcntl(out[0], F_GETFL) | O_NONBLOCK);
   *out_fd = out[0];
-  return pid;
+  return child.pid;
 }
 
 void drain(Running& r, ProcessOutcome& o) {
@@ -153,27 +128,6 @@ bool reap(Running& r, ProcessOutcome& o, bool block) {
 }
 
 }  // namespace
-
-std::string findProgram(const std::string& name) {
-  if (name.empty()) return {};
-  auto executable = [](const std::string& p) {
-    struct stat st;
-    return stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode) && access(p.c_str(), X_OK) == 0;
-  };
-  if (name.find('/') != std::string::npos) return executable(name) ? name : std::string();
-  const char* path = std::getenv("PATH");
-  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
-  std::size_t start = 0;
-  while (start <= dirs.size()) {
-    std::size_t end = dirs.find(':', start);
-    if (end == std::string::npos) end = dirs.size();
-    std::string dir = dirs.substr(start, end - start);
-    std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
-    if (executable(candidate)) return candidate;
-    start = end + 1;
-  }
-  return {};
-}
 
 std::string commandLine(const std::vector<std::string>& argv) {
   std::string s;

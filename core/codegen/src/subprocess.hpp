@@ -41,10 +41,6 @@ struct ProcessOutcome {
 std::vector<ProcessOutcome> runProcesses(const std::vector<std::vector<std::string>>& commands,
                                          const ProcessLimits& limits);
 
-// The executable argv[0] names: itself when it contains '/', else the first match in
-// PATH; empty when there is none.
-std::string findProgram(const std::string& name);
-
 // A command line as a person would type it (for messages).
 std::string commandLine(const std::vector<std::string>& argv);
 

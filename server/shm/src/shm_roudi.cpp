@@ -18,6 +18,8 @@
 #include <string>
 #include <thread>
 
+#include "robodiff/process/program_path.hpp"
+#include "robodiff/process/spawn.hpp"
 #include "robodiff/schema/shm_mempools.hpp"
 #include "robodiff/schema/shm_runtime.hpp"
 
@@ -101,23 +103,43 @@ void waitForRoudi(Alive alive) {
   }
 }
 
+// What the iox-roudi child sets up before exec (async-signal-safe calls only): the
+// signals robodiffd blocks unblocked, stopped when robodiffd dies, its banner into
+// /dev/null (warnings still reach stderr), and a process group of its own (a terminal's
+// Ctrl-C goes to robodiffd, which stops RouDi last).
+struct RoudiChild {
+  pid_t parent;
+  int devnull;
+};
+
+void setUpOwnedRoudi(const void* context, int /*report_fd*/) {
+  const auto& c = *static_cast<const RoudiChild*>(context);
+  resetSignalsForExec();
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (::getppid() != c.parent) ::_exit(1);
+  if (c.devnull >= 0) ::dup2(c.devnull, STDOUT_FILENO);
+  ::setpgid(0, 0);
+}
+
 std::unique_ptr<RoudiHandle> startOwnedRoudi(Logger& log) {
+  const std::string program = process::findProgram("iox-roudi");
+  if (program.empty()) throw std::runtime_error("cannot start a RouDi: iox-roudi is not in PATH (package iceoryx)");
   const auto config = writeRoudiConfig("");
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error("fork for iox-roudi failed");
-  if (pid == 0) {
-    resetSignalsForExec();
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (::getppid() != parent) ::_exit(1);
-    const int devnull = ::open("/dev/null", O_WRONLY);
-    if (devnull >= 0) ::dup2(devnull, STDOUT_FILENO);  // RouDi's banner; warnings still reach stderr
-    ::setpgid(0, 0);  // a terminal's Ctrl-C goes to robodiffd, which stops RouDi last
-    execRoudi(config);
+  const std::string config_path = config.string();
+  char* const argv[] = {const_cast<char*>("iox-roudi"), const_cast<char*>("-c"), const_cast<char*>(config_path.c_str()),
+                        const_cast<char*>("-l"), const_cast<char*>("warning"), nullptr};
+  const int devnull = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+  const RoudiChild setup{::getpid(), devnull};
+  const process::Spawned child = process::spawn(program.c_str(), argv, setUpOwnedRoudi, &setup);
+  if (devnull >= 0) ::close(devnull);
+  if (!child.ok()) {
+    std::error_code ignored;
+    std::filesystem::remove(config, ignored);
+    throw std::runtime_error("cannot start a RouDi: " + child.error);
   }
-  auto roudi = std::make_unique<OwnedRoudi>(pid, config);
+  auto roudi = std::make_unique<OwnedRoudi>(child.pid, config);
   waitForRoudi([&] { return roudi->alive(); });
-  log.info("roudi_started", {{"pid", static_cast<long long>(pid)}, {"config", config.string()},
+  log.info("roudi_started", {{"pid", static_cast<long long>(child.pid)}, {"config", config.string()},
                              {"max_chunk_payload", static_cast<std::uint64_t>(shm::maxChunkPayload())}});
   return roudi;
 }
