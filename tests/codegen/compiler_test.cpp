@@ -174,6 +174,17 @@ TEST(Compiler, AMissingCompilerCannotRun) {
       EXPECT_NE(std::string(e.what()).find(cc), std::string::npos) << e.what();
     }
   }
+  // A file that is there but not executable is named as such.
+  const fs::path data = dir / "cc-without-x";
+  std::ofstream(data) << "#!/bin/sh\n";
+  try {
+    compileLibrary(smallLibrary(), dir / "lib.so", quick(data.string()));
+    FAIL() << "no error";
+  } catch (const CompileError& e) {
+    EXPECT_EQ(e.kind(), CompileError::Kind::CannotRun);
+    EXPECT_NE(std::string(e.what()).find("'" + data.string() + "' is not an executable file"), std::string::npos)
+        << e.what();
+  }
   // Arguments in the compiler name would bypass the allowlist.
   EXPECT_THROW(compileLibrary(smallLibrary(), dir / "lib.so", quick("gcc -O3")), CompileError);
 }

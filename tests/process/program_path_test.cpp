@@ -62,5 +62,14 @@ TEST(ProgramPath, APathIsCheckedNotSearched) {
   EXPECT_FALSE(isExecutableFile(dir.path()));
 }
 
+TEST(ProgramPath, WhyNotFoundNamesTheCase) {
+  TempDir dir;
+  writeScript(dir / "data", false);
+  ScopedPath path("/nonexistent-a:/nonexistent-b");
+  EXPECT_EQ(whyNotFound((dir / "data").string()), "'" + (dir / "data").string() + "' is not an executable file");
+  EXPECT_EQ(whyNotFound((dir / "gone").string()), "'" + (dir / "gone").string() + "' does not exist");
+  EXPECT_EQ(whyNotFound("tool"), "'tool' is not in PATH (/nonexistent-a:/nonexistent-b)");
+}
+
 }  // namespace
 }  // namespace robodiff::process

@@ -140,7 +140,7 @@ std::string resolveCompiler(const CompilerOptions& options) {
                            "' has arguments: give one program (flags come from CompilerOptions only)");
   const std::string path = process::findProgram(program);
   if (path.empty())
-    throw CompileError(CompileError::Kind::CannotRun, "cannot run the compiler: '" + program + "' not found (not a path, and not in PATH)");
+    throw CompileError(CompileError::Kind::CannotRun, "cannot run the compiler: " + process::whyNotFound(program));
   return path;
 }
 

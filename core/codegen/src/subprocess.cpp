@@ -60,7 +60,7 @@ void setUpChild(const void* context, int /*report_fd*/) {
 // Starts one process; on failure fills outcome and returns pid -1.
 pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, int* out_fd, ProcessOutcome& outcome) {
   const std::string path = process::findProgram(argv.at(0));
-  if (path.empty()) return cannotStart(outcome, "'" + argv[0] + "' not found (not a path, and not in PATH)");
+  if (path.empty()) return cannotStart(outcome, process::whyNotFound(argv[0]));
   // Everything the child needs is prepared before fork.
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));

@@ -29,4 +29,16 @@ std::string findProgram(const std::string& name) {
   return {};
 }
 
+std::string whyNotFound(const std::string& name) {
+  if (name.empty()) return "no program named";
+  const std::string quoted = "'" + name + "'";
+  if (name.find('/') == std::string::npos) {
+    const char* path = std::getenv("PATH");
+    return quoted + " is not in PATH (" + (path ? path : "unset") + ")";
+  }
+  std::error_code ec;
+  if (!std::filesystem::exists(name, ec)) return quoted + " does not exist";
+  return quoted + " is not an executable file";
+}
+
 }  // namespace robodiff::process

@@ -14,4 +14,8 @@ bool isExecutableFile(const std::filesystem::path& path);
 // directory). Empty when there is none.
 std::string findProgram(const std::string& name);
 
+// Why findProgram(name) found nothing, for a message: "'/opt/cc' does not exist",
+// "'/opt/cc' is not an executable file", or "'cc' is not in PATH (/usr/bin:/bin)".
+std::string whyNotFound(const std::string& name);
+
 }  // namespace robodiff::process
