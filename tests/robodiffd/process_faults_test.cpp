@@ -2,6 +2,7 @@
 // 2.0 frees a dropped process's ports, and robodiffd used to abort on them at its next
 // SIGTERM (POPO__CHUNK_LOCKING_ERROR) while /readyz still said ok. Now it notices the
 // pause, says so, drains what it can and exits with 4 for its supervisor to restart it.
+// And at start: a RouDi it must start but cannot (no iox-roudi) is named at once.
 #include <signal.h>
 
 #include <chrono>
@@ -10,11 +11,31 @@
 #include "robodiffd/service_fixture.hpp"
 #include "support/cache_workspace.hpp"
 #include "support/process.hpp"
+#include "robodiff/schema/shm_runtime.hpp"
 
 namespace robodiff::testing {
 namespace {
 
 using namespace std::chrono_literals;
+
+// A RouDi robodiffd must start (roudi = embedded) with no iox-roudi in PATH: it says so
+// at once and exits non-zero, rather than failing an exec it cannot tell apart.
+TEST(ProcessFaults, AMissingIoxRoudiIsNamedAtStart) {
+  if (shm::roudiRunning()) GTEST_SKIP() << "a RouDi is already running on this host; embedded mode would refuse first";
+  TempDir dir;
+  std::filesystem::create_directory(dir / "empty-bin");
+  useLoopbackDds();
+  const std::string command = "PATH=" + shellQuote((dir / "empty-bin").string()) + " " +
+                              shellQuote(robodiffdPath().string()) + " --cache " + shellQuote((dir / "cache").string()) +
+                              " --dds-domain " + std::to_string(testDomain()) +
+                              " --roudi embedded --no-http --log-format json";
+  const ProcessResult r = runCommand(command);
+  EXPECT_NE(r.exit_code, 0) << r.out << r.err;
+  const nlohmann::json failed = logEvent(r.out + r.err, "startup_failed");
+  ASSERT_FALSE(failed.is_null()) << r.out << r.err;
+  EXPECT_EQ(failed.value("message", ""), "cannot start a RouDi: iox-roudi is not in PATH (package iceoryx)");
+  EXPECT_FALSE(shm::roudiRunning());
+}
 
 TEST(ProcessFaults, APauseLongEnoughForRouDiToDropItEndsInExitCode4) {
   signal(SIGTERM, SIG_IGN);  // see end_to_end_test.cpp
