@@ -3,12 +3,15 @@
 #include "robodiff/process/spawn.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -66,6 +69,41 @@ TEST(Spawn, AFileWithoutExecutePermissionIsRefusedWithTheReason) {
   EXPECT_FALSE(child.ok());
   EXPECT_EQ(child.error, "cannot execute '" + script.string() + "': Permission denied");
   EXPECT_TRUE(noChildLeft());
+}
+
+// Whether `pid` still runs (a zombie awaiting its reaper counts as ended).
+bool running(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return false;
+  const auto close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] != 'Z';
+}
+
+TEST(Spawn, TheParentDeathSignalEndsTheChildWithItsParent) {
+  int pid_pipe[2];
+  ASSERT_EQ(::pipe(pid_pipe), 0);
+  const pid_t middle = ::fork();
+  ASSERT_GE(middle, 0);
+  if (middle == 0) {  // spawns a long sleep with SIGKILL as its death signal, then ends
+    char* const argv[] = {const_cast<char*>("sleep"), const_cast<char*>("30"), nullptr};
+    const Spawned child = spawn("/bin/sleep", argv, nullptr, nullptr, SIGKILL);
+    (void)!::write(pid_pipe[1], &child.pid, sizeof child.pid);
+    ::_exit(child.ok() ? 0 : 1);
+  }
+  ::close(pid_pipe[1]);
+  pid_t sleeper = -1;
+  ASSERT_EQ(::read(pid_pipe[0], &sleeper, sizeof sleeper), static_cast<ssize_t>(sizeof sleeper));
+  ::close(pid_pipe[0]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(middle, &status, 0), middle);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  ASSERT_GT(sleeper, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (running(sleeper) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_FALSE(running(sleeper)) << "the sleep outlived the process that spawned it";
+  if (running(sleeper)) ::kill(sleeper, SIGKILL);
 }
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -44,16 +43,15 @@ namespace {
 
 // What the forked worker sets up before exec (async-signal-safe calls only).
 struct WorkerChild {
-  pid_t parent;
   long max_fd;
   int to_read;     // its stdin
   int from_write;  // its stdout
 };
 
 // Its own session (and process group), apart from the terminal's signals, so that every
-// process it starts carries the session id even once orphaned (process_tree.hpp); killed
-// with the pool's supervisor thread; default signal handling; stdin and stdout the
-// pool's pipes, no other descriptor of the pool's process but `report_fd`.
+// process it starts carries the session id even once orphaned (process_tree.hpp);
+// default signal handling; stdin and stdout the pool's pipes, no other descriptor of the
+// pool's process but `report_fd`.
 void setUpWorker(const void* context, int report_fd) {
   const auto& c = *static_cast<const WorkerChild*>(context);
   sigset_t no_signals;
@@ -61,8 +59,6 @@ void setUpWorker(const void* context, int report_fd) {
   struct sigaction default_action {};
   default_action.sa_handler = SIG_DFL;
   ::setsid();
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // dies with the pool's supervisor thread
-  if (::getppid() != c.parent) ::_exit(127);  // the pool died before prctl took effect
   for (int sig : {SIGPIPE, SIGINT, SIGTERM, SIGHUP, SIGQUIT}) ::sigaction(sig, &default_action, nullptr);
   ::sigprocmask(SIG_SETMASK, &no_signals, nullptr);  // the supervisor blocks SIGPIPE
   ::dup2(c.to_read, 0);
@@ -93,8 +89,9 @@ WorkerProcess startWorkerProcess(const fs::path& executable) {
   const std::string path = executable.string();
   char* const argv[] = {const_cast<char*>(path.c_str()), nullptr};
   const long max_fd = std::min<long>(::sysconf(_SC_OPEN_MAX) > 0 ? ::sysconf(_SC_OPEN_MAX) : 1024, 65536);
-  const WorkerChild setup{::getpid(), max_fd, to[0], from[1]};
-  const process::Spawned child = process::spawn(path.c_str(), argv, setUpWorker, &setup);
+  const WorkerChild setup{max_fd, to[0], from[1]};
+  // SIGKILL when the pool's supervisor thread ends: a worker dies with its pool.
+  const process::Spawned child = process::spawn(path.c_str(), argv, setUpWorker, &setup, SIGKILL);
   ::close(to[0]);
   ::close(from[1]);
   if (!child.ok()) {

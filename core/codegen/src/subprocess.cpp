@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/time.h>
@@ -38,19 +37,16 @@ pid_t cannotStart(ProcessOutcome& outcome, std::string why) {
 
 // What the forked compiler's child sets up before exec (async-signal-safe calls only).
 struct CompilerChild {
-  pid_t parent;
   const struct rlimit* as_limit;  // null: no limit
   int devnull;                    // stdin; -1: left as it is
   int out_write;                  // stdout and stderr
 };
 
-// Its own process group, killed with the thread that waits for it, `as_limit`'s
-// address space, stdin from /dev/null, stdout and stderr into the output pipe.
+// Its own process group (killed with the thread that waits for it: spawn's death
+// signal), `as_limit`'s address space, stdin from /dev/null, stdout and stderr into the output pipe.
 void setUpChild(const void* context, int /*report_fd*/) {
   const auto& c = *static_cast<const CompilerChild*>(context);
-  setpgid(0, 0);                    // its own group: a timeout kills the compiler's children too
-  prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive the thread waiting for it
-  if (getppid() != c.parent) _exit(127);  // (a worker killed before prctl took effect)
+  setpgid(0, 0);  // its own group: a timeout kills the compiler's children too
   if (c.as_limit) setrlimit(RLIMIT_AS, c.as_limit);
   if (c.devnull >= 0) dup2(c.devnull, 0);
   dup2(c.out_write, 1);
@@ -70,8 +66,9 @@ pid_t start(const std::vector<std::string>& argv, const ProcessLimits& limits, i
   const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
   struct rlimit as_limit;
   as_limit.rlim_cur = as_limit.rlim_max = static_cast<rlim_t>(limits.address_space_bytes);
-  const CompilerChild setup{getpid(), limits.address_space_bytes > 0 ? &as_limit : nullptr, devnull, out[1]};
-  const process::Spawned child = process::spawn(path.c_str(), args.data(), setUpChild, &setup);
+  const CompilerChild setup{limits.address_space_bytes > 0 ? &as_limit : nullptr, devnull, out[1]};
+  // SIGKILL when the thread waiting for it ends: a compiler does not outlive its build.
+  const process::Spawned child = process::spawn(path.c_str(), args.data(), setUpChild, &setup, SIGKILL);
   if (devnull >= 0) close(devnull);
   close(out[1]);
   if (!child.ok()) {

@@ -1,6 +1,7 @@
 #include "robodiff/process/spawn.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,7 +13,11 @@ namespace {
 
 // The child's side: setup, exec, and on failure exec's errno into the report pipe.
 [[noreturn]] void execChild(const char* path, char* const* argv, ChildSetup setup, const void* context,
-                            int report_write) {
+                            int report_write, pid_t parent, int parent_death_signal) {
+  if (parent_death_signal) {
+    ::prctl(PR_SET_PDEATHSIG, parent_death_signal);
+    if (::getppid() != parent) ::_exit(127);  // the parent died before prctl took effect
+  }
   if (setup) setup(context, report_write);
   ::execv(path, argv);
   const int e = errno;
@@ -31,11 +36,12 @@ int readExecReport(int report_read) {
 
 }  // namespace
 
-Spawned spawn(const char* path, char* const* argv, ChildSetup setup, const void* context) {
+Spawned spawn(const char* path, char* const* argv, ChildSetup setup, const void* context, int parent_death_signal) {
   int report[2];
   if (::pipe2(report, O_CLOEXEC) != 0) return {-1, std::string("pipe: ") + std::strerror(errno)};
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
-  if (pid == 0) execChild(path, argv, setup, context, report[1]);
+  if (pid == 0) execChild(path, argv, setup, context, report[1], parent, parent_death_signal);
   const int fork_errno = errno;
   ::close(report[1]);
   if (pid < 0) {

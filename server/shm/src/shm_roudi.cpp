@@ -5,7 +5,6 @@
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -103,21 +102,14 @@ void waitForRoudi(Alive alive) {
   }
 }
 
-// What the iox-roudi child sets up before exec (async-signal-safe calls only): the
-// signals robodiffd blocks unblocked, stopped when robodiffd dies, its banner into
+// What the iox-roudi child sets up before exec (async-signal-safe calls only; `context`
+// the /dev/null descriptor): the signals robodiffd blocks unblocked, its banner into
 // /dev/null (warnings still reach stderr), and a process group of its own (a terminal's
 // Ctrl-C goes to robodiffd, which stops RouDi last).
-struct RoudiChild {
-  pid_t parent;
-  int devnull;
-};
-
 void setUpOwnedRoudi(const void* context, int /*report_fd*/) {
-  const auto& c = *static_cast<const RoudiChild*>(context);
+  const int devnull = *static_cast<const int*>(context);
   resetSignalsForExec();
-  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-  if (::getppid() != c.parent) ::_exit(1);
-  if (c.devnull >= 0) ::dup2(c.devnull, STDOUT_FILENO);
+  if (devnull >= 0) ::dup2(devnull, STDOUT_FILENO);
   ::setpgid(0, 0);
 }
 
@@ -129,8 +121,8 @@ std::unique_ptr<RoudiHandle> startOwnedRoudi(Logger& log) {
   char* const argv[] = {const_cast<char*>("iox-roudi"), const_cast<char*>("-c"), const_cast<char*>(config_path.c_str()),
                         const_cast<char*>("-l"), const_cast<char*>("warning"), nullptr};
   const int devnull = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
-  const RoudiChild setup{::getpid(), devnull};
-  const process::Spawned child = process::spawn(program.c_str(), argv, setUpOwnedRoudi, &setup);
+  // SIGTERM when robodiffd dies: an owned RouDi does not outlive it.
+  const process::Spawned child = process::spawn(program.c_str(), argv, setUpOwnedRoudi, &devnull, SIGTERM);
   if (devnull >= 0) ::close(devnull);
   if (!child.ok()) {
     std::error_code ignored;

@@ -23,9 +23,12 @@ struct Spawned {
   bool ok() const { return pid > 0; }
 };
 
-// Forks; the child runs setup(context, report_fd) when a setup is given and then
-// execv(path, argv) (argv null-terminated; this process's environment). Returns once
-// the child has executed the program, or has been reaped after failing to.
-Spawned spawn(const char* path, char* const* argv, ChildSetup setup = nullptr, const void* context = nullptr);
+// Forks; with a `parent_death_signal`, the child gets it when the thread that forked it
+// ends (PR_SET_PDEATHSIG; a child whose parent is already gone exits at once); then it
+// runs setup(context, report_fd) when a setup is given and execv(path, argv) (argv
+// null-terminated; this process's environment). Returns once the child has executed
+// the program, or has been reaped after failing to.
+Spawned spawn(const char* path, char* const* argv, ChildSetup setup = nullptr, const void* context = nullptr,
+              int parent_death_signal = 0);
 
 }  // namespace robodiff::process
