@@ -7,8 +7,10 @@
 // Rows are [linear x y z; angular x y z]; columns follow v.
 #pragma once
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "robodiff/dynamics/kinematics.hpp"
 
@@ -45,25 +47,61 @@ const Matrix6X<S>& computeJointJacobians(const Model& model, Data<S>& data, cons
 
 namespace detail {
 
+// The joints from the root to `joint`, root first.
+inline std::vector<int> pathFromRoot(const Model& model, int joint) {
+  std::vector<int> path;
+  for (int j = joint; j >= 0; j = model.joints[j].parent) path.push_back(j);
+  return {path.rbegin(), path.rend()};
+}
+
+// For each joint of `path`, the world rotation to multiply the column's vector by:
+// R_j w = R_a (Q_{a+1} ... Q_j w), with Q the joints' own rotations. Each revolute joint
+// adds one level of products after its sin and cos, to R_j from the root side and to
+// the offset u_j from the frame's side; the column waits for the deeper of R_a and the
+// rotated vector. The a that ends soonest, the latest of those on ties (fewest products).
+inline std::vector<int> balancedRotationJoints(const Model& model, const std::vector<int>& path) {
+  const int m = static_cast<int>(path.size());
+  std::vector<int> level(m + 1, 0);  // level[i + 1]: revolute joints in path[0..i]
+  for (int i = 0; i < m; ++i) level[i + 1] = level[i] + (model.joints[path[i]].type == JointType::Revolute);
+  std::vector<int> chosen(m);
+  for (int i = 0; i < m; ++i) {
+    const int offset_level = level[m] - level[i + 1];
+    int best = i, best_depth = std::max(level[i + 1], offset_level);
+    for (int a = i - 1; a >= 0; --a) {
+      const int depth = std::max(level[a + 1], offset_level + level[i + 1] - level[a + 1]);
+      if (depth < best_depth) best = a, best_depth = depth;
+    }
+    chosen[i] = best;
+  }
+  return chosen;
+}
+
 // LOCAL_WORLD_ALIGNED from the placements alone: column (joint j, k) is
 // R_j [s_lin + s_ang x u_j; s_ang], with R_j joint j's world rotation, s its subspace
 // column in its own frame and u_j = p_f - p_j in joint j's frame. The offsets u_j are
 // summed from the frame towards the root in the joints' own frames (u_parent =
 // liMi u_j + t_j), so they wait only on each joint's own sin and cos, not on the chain
 // of world rotations, and no world position enters: nothing cancels where the robot
-// stands far from the origin.
+// stands far from the origin. The linear part is rotated to the world in two steps
+// where that ends sooner (balancedRotationJoints): a frame Jacobian is a chain of
+// latencies, not of throughput.
 template <class S> Matrix6X<S> frameJacobianWorldAligned(const Model& model, const Data<S>& data, int frame_index) {
   Matrix6X<S> J = Matrix6X<S>::Zero(6, model.nv);
   const Frame& frame = model.frames[frame_index];
   if (frame.parent_joint < 0) return J;
+  const std::vector<int> path = pathFromRoot(model, frame.parent_joint);
+  const std::vector<int> rotate_by = balancedRotationJoints(model, path);
   Vec3<S> to_frame = asScalar<S>(frame.placement).translation;  // u_j
-  for (int j = frame.parent_joint; j >= 0; j = model.joints[j].parent) {
+  for (int i = static_cast<int>(path.size()) - 1; i >= 0; --i) {
+    const int j = path[i];
     const Joint& joint = model.joints[j];
     const Mat3<S>& R = data.oMi[j].rotation;
     for (int k = 0; k < joint.nv; ++k) {
       const Motion<S> s = subspaceColumn<S>(joint, k);
       J.template block<3, 1>(3, joint.idx_v + k) = rotatedSubspaceColumn(joint, R, k).angular;
-      J.template block<3, 1>(0, joint.idx_v + k) = R * Vec3<S>(s.linear + s.angular.cross(to_frame));
+      Vec3<S> w = s.linear + s.angular.cross(to_frame);
+      for (int t = i; t > rotate_by[i]; --t) w = data.liMi[path[t]].rotation * w;
+      J.template block<3, 1>(0, joint.idx_v + k) = data.oMi[path[rotate_by[i]]].rotation * w;
     }
     if (joint.parent >= 0) to_frame = data.liMi[j].act(to_frame);
   }
