@@ -99,6 +99,34 @@ TEST(SincosKernel, BeyondItsRangeItIsLibm) {
   }
 }
 
+// The vector variant (RD_SC_VECTOR: the quadrant's signs set before the polynomials' last
+// operations, only the swap after them) against the one-argument kernel (signs and swap
+// after), bit for bit: changing a sign is exact, so the two orders must agree wherever
+// the compiler contracts the same operations (here, none: no FMA target).
+typedef double ScQuad __attribute__((vector_size(32)));
+typedef unsigned long long ScQuadBits __attribute__((vector_size(32)));
+
+TEST(SincosKernel, VectorLanesAreTheOneArgumentKernelBitForBit) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> joint(-10.0, 10.0), far(-0x1p19, 0x1p19), tiny(-1e-6, 1e-6);
+  std::uniform_int_distribution<int> quarter(-40000, 40000);
+  std::size_t differing = 0, lanes = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const ScQuad x = {joint(rng), far(rng), tiny(rng), quarter(rng) * (M_PI / 2.0)};
+    ScQuad s, c;
+    RD_SC_VECTOR(ScQuad, ScQuadBits, x, s, c);
+    for (int l = 0; l < 4; ++l, ++lanes) {
+      double one_s, one_c;
+      rd_sincos1_in_range(x[l], &one_s, &one_c);
+      const double vs = s[l], vc = c[l];
+      if (std::memcmp(&one_s, &vs, sizeof vs) != 0 || std::memcmp(&one_c, &vc, sizeof vc) != 0) {
+        if (differing++ < 3) ADD_FAILURE() << "x = " << x[l] << ": " << vs << ", " << vc << " vs " << one_s << ", " << one_c;
+      }
+    }
+  }
+  EXPECT_EQ(differing, 0u) << "of " << lanes << " lanes";
+}
+
 // sin and cos of one input, compiled: the batched variant (every SIMD lane at once)
 // against the single call, with lanes beyond the kernel's range among ordinary ones.
 TEST(SincosKernel, BatchedLanesMatchTheSingleCall) {
