@@ -146,6 +146,7 @@ std::string scalarPart(const FunctionDefinition& f, const Lowerings& l, const st
   const std::uint32_t parts = static_cast<std::uint32_t>(l.plain.chunks.size());
   const std::string table = l.compact ? prefixOf(f) + (parts > 1 ? "_p" + std::to_string(p) : "") : "";
   ChunkPrinter scalar(f, Flavour::Scalar);
+  scalar.packOutputGroups(parts == 1);
   if (!anyPairs(l)) return scalar.print(signature, l.plain.chunks[p], false, table);
   return "#if RD_PAIRS\n" + scalar.print(signature, l.paired.chunks[p], false, table) + "#else\n" +
          scalar.print(signature, l.plain.chunks[p], false, table) + "#endif\n";
@@ -162,6 +163,8 @@ void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, st
   if (checked_at_entry) {
     ChunkPrinter scalar(f, Flavour::Scalar), in_range(f, Flavour::Scalar);
     in_range.inRangeKernels(true);
+    scalar.packOutputGroups(true);
+    in_range.packOutputGroups(true);
     main << "#if RD_PAIRS\n"
          << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
                            l.paired.chunks[0])

@@ -50,6 +50,7 @@ std::string ChunkPrinter::printOnce(const std::string& signature, const Chunk& c
   out_.str("");
   declared_.assign(chunk.slots, 0);
   declared_pair_.assign(chunk.pair_slots, 0);
+  groups_ = pack_groups_ && !vector() ? planOutputGroups(f_, chunk, kStoredZerosMaximum) : OutputGroupPlan{};
   std::set<std::uint32_t> in_blocks, out_blocks, zeroed, claimed;
   bool uses_work = false;
   for (const Instr& ins : chunk.code) {
@@ -227,13 +228,25 @@ void ChunkPrinter::printZeros(std::uint32_t block, const std::vector<ZeroRun>& r
   for (const ZeroRun& r : runs)
     for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
       const std::uint32_t group = k / 4 * 4;
-      if (group + 4 <= size) {
+      if (group + 4 <= size && groups_.packs(block, group)) {
+        cleared_to = group + 4;  // stored whole with its values (printGroupedStore)
+      } else if (group + 4 <= size) {
         out_ << "  RD_ZERO4(" << address(o, group, 4) << ");\n";
         cleared_to = group + 4;
       } else {
         out_ << "  " << element(o, k) << " = 0.0;\n";
       }
     }
+}
+
+void ChunkPrinter::printGroupedStore(const Instr& ins, std::uint32_t at) {
+  auto name = [&](std::uint32_t element) { return cat("rd_o", std::to_string(ins.block), "_", std::to_string(element)); };
+  out_ << "  const double " << name(ins.index) << " = " << operand(ins.args[0]) << ";\n";
+  const OutputGroup& g = groups_.groups[groups_.group_of[at]];
+  if (g.last != at) return;
+  out_ << "  RD_STORE4(" << address("o" + std::to_string(g.block), g.start, 4);
+  for (std::uint32_t e = 0; e < 4; ++e) out_ << ", " << (g.store[e] == kZeroElement ? "0.0" : name(g.start + e));
+  out_ << ");\n";
 }
 
 void ChunkPrinter::printInstr(const Instr& ins, const Chunk& chunk) {
@@ -294,6 +307,13 @@ void ChunkPrinter::printInstr(const Instr& ins, const Chunk& chunk) {
            << ", &t" << ins.dst << ", &t" << ins.dst2 << ");\n";
       break;
     case InstrKind::StoreOutput:
+      if (!groups_.group_of.empty()) {
+        const auto at = static_cast<std::uint32_t>(&ins - chunk.code.data());
+        if (groups_.group_of[at] != kNoGroup) {
+          printGroupedStore(ins, at);
+          break;
+        }
+      }
       if (vector())
         out_ << "  rd_scatter(o" << ins.block << " + " << ins.index << ", " << f_.outputs[ins.block].size() << ", "
              << operand(ins.args[0], true) << ");\n";

@@ -13,6 +13,7 @@
 
 #include "compact_addressing.hpp"
 #include "lowering.hpp"
+#include "output_groups.hpp"
 #include "robodiff/codegen/function_definition.hpp"
 
 namespace robodiff::codegen::detail {
@@ -39,6 +40,10 @@ class ChunkPrinter {
   // true: sin and cos by the _in_range kernels, with no range check of their own (the
   // function checks its arguments at entry).
   void inRangeKernels(bool on) { in_range_ = on; }
+
+  // true: the chunk holds all of its function's output stores, which are packed into
+  // 32-byte groups where the function is bound by its stores (output_groups.hpp).
+  void packOutputGroups(bool on) { pack_groups_ = on; }
 
   // `signature` is the function's declaration up to, not including, the body.
   // `first`: the function's first chunk, where the batched flavour claims its outputs.
@@ -98,10 +103,14 @@ class ChunkPrinter {
   void printZeros(std::uint32_t block, const std::vector<ZeroRun>& runs);
 
   void printInstr(const Instr& ins, const Chunk& chunk);
+  // A StoreOutput of a packed group: its value named, and the group stored after its last.
+  void printGroupedStore(const Instr& ins, std::uint32_t at);
 
   const FunctionDefinition& f_;
   Flavour flavour_;
   bool in_range_ = false;
+  bool pack_groups_ = false;
+  OutputGroupPlan groups_;  // of the chunk being printed
   std::ostringstream out_;
   std::vector<char> declared_, declared_pair_;
   CompactAddressing* compact_ = nullptr;  // during print() of a compactly addressed body
