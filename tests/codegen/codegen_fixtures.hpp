@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/codegen/function_definition.hpp"
 #include "robodiff/symbolic/graph.hpp"
 #include "support/temp_dir.hpp"
@@ -54,6 +55,12 @@ std::vector<std::vector<double>> reference(const Graph& g, const FunctionDefinit
 
 // |a - b| <= tolerance * max(|a|, |b|) (both NaN counts as equal).
 bool closeRelative(double a, double b, double tolerance = 1e-12);
+
+// Compiles `lib` (into a temporary folder), evaluates its function `f` single-knot at
+// three random points and expects every output element within `tolerance` of the
+// graph's (the outputs start as NaN, so an element left unwritten fails).
+void expectCompiledAsTheGraph(const Graph& g, const FunctionDefinition& f, const GeneratedLibrary& lib,
+                              double tolerance);
 
 }  // namespace robodiff::codegen::testing
 

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "robodiff/codegen/compiler.hpp"
+#include "robodiff/codegen/loaded_library.hpp"
 #include "support/process.hpp"
 
 namespace robodiff::codegen::testing {
@@ -260,6 +262,23 @@ bool closeRelative(double a, double b, double tolerance) {
   if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
   if (a == b) return true;
   return std::fabs(a - b) <= tolerance * std::max(std::fabs(a), std::fabs(b));
+}
+
+void expectCompiledAsTheGraph(const Graph& g, const FunctionDefinition& f, const GeneratedLibrary& lib,
+                              double tolerance) {
+  robodiff::testing::TempDir dir;
+  const LoadedLibrary loaded = LoadedLibrary::open(compileLibrary(lib, dir / (f.name + ".so")).library);
+  const CompiledFunction& compiled = loaded.function(f.name);
+  std::vector<double> work(compiled.workSize() + 1);
+  for (std::uint32_t seed = 1; seed <= 3; ++seed) {
+    const auto in = randomInputs(f, 1, seed);
+    const auto expected = reference(g, f, in, 0);
+    auto out = outputBuffers(f, 1);
+    compiled.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
+    for (std::size_t b = 0; b < out.size(); ++b)
+      for (std::size_t k = 0; k < out[b].size(); ++k)
+        EXPECT_NEAR(out[b][k], expected[b][k], tolerance) << "seed " << seed << ", block " << b << ", element " << k;
+  }
 }
 
 bool haveProgram(const std::string& program) {

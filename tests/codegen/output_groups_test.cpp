@@ -11,15 +11,11 @@
 
 #include "codegen_fixtures.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
-#include "robodiff/codegen/compiler.hpp"
-#include "robodiff/codegen/loaded_library.hpp"
-#include "support/temp_dir.hpp"
 
 namespace robodiff::codegen {
 namespace {
 
 using namespace testing;
-using robodiff::testing::TempDir;
 
 // A frame-Jacobian-like block (6 x 10, row-major): a few values from two angles, the same
 // value in several places, a constant, and zeros; 12 values of 60 from a handful of
@@ -57,20 +53,6 @@ std::set<std::uint32_t> groupStarts(const std::string& body) {
   return starts;
 }
 
-void expectTheGraphsValues(const Graph& g, const FunctionDefinition& f, const GeneratedLibrary& lib) {
-  TempDir dir;
-  const LoadedLibrary loaded = LoadedLibrary::open(compileLibrary(lib, dir / (f.name + ".so")).library);
-  const CompiledFunction& compiled = loaded.function(f.name);
-  std::vector<double> work(compiled.workSize() + 1);
-  for (std::uint32_t seed = 1; seed <= 3; ++seed) {
-    const auto in = randomInputs(f, 1, seed);
-    const auto expected = reference(g, f, in, 0);
-    auto out = outputBuffers(f, 1);
-    compiled.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
-    for (std::size_t k = 0; k < out[0].size(); ++k) EXPECT_NEAR(out[0][k], expected[0][k], 1e-15) << seed << " " << k;
-  }
-}
-
 TEST(OutputGroups, AStoreBoundFunctionWritesEachGroupOfTwoStoresOrMoreWithOne) {
   Graph g;
   const FunctionDefinition f = storeBound(g);
@@ -92,7 +74,7 @@ TEST(OutputGroups, AStoreBoundFunctionWritesEachGroupOfTwoStoresOrMoreWithOne) {
   EXPECT_EQ(body.find("o0["), std::string::npos) << "an element stored alone:\n" << body;
   // The all-zero groups keep their four-zero store.
   EXPECT_EQ(countOf(body, "RD_ZERO4("), 15u - want.size()) << body;
-  expectTheGraphsValues(g, f, lib);
+  expectCompiledAsTheGraph(g, f, lib, 1e-15);
 }
 
 TEST(OutputGroups, AFunctionBoundByItsArithmeticKeepsItsStores) {
@@ -111,7 +93,7 @@ TEST(OutputGroups, AFunctionInPartsKeepsItsStores) {
   const GeneratedLibrary lib = generateLibrary(g, {f}, split);
   ASSERT_GT(lib.functions.at(0).parts, 1u);
   for (const SourceFile& source : lib.sources) EXPECT_EQ(source.text.find("RD_STORE4(o"), std::string::npos) << source.path;
-  expectTheGraphsValues(g, f, lib);
+  expectCompiledAsTheGraph(g, f, lib, 1e-15);
 }
 
 }  // namespace
