@@ -25,29 +25,35 @@ std::vector<std::vector<std::uint32_t>> writers(const FunctionDefinition& f, con
   return w;
 }
 
-// Stores the chunk issues for its outputs as printed without groups: one per StoreOutput,
-// one per group of four holding a zero of a run (ChunkPrinter::printZeros).
-std::uint32_t storesWithoutGroups(const Chunk& chunk) {
-  std::uint32_t stores = 0;
-  for (const Instr& ins : chunk.code) {
-    if (ins.kind == InstrKind::StoreOutput) ++stores;
-    if (ins.kind != InstrKind::ZeroOutput) continue;
-    std::uint32_t cleared_to = 0;
-    for (const ZeroRun& r : chunk.zero_runs.at(ins.index))
-      for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
-        ++stores;
-        cleared_to = k / 4 * 4 + 4;
-      }
-  }
-  return stores;
-}
-
 std::uint32_t zerosOf(const Chunk& chunk, std::uint32_t block) {
   std::uint32_t zeros = 0;
   for (const Instr& ins : chunk.code)
     if (ins.kind == InstrKind::ZeroOutput && ins.block == block)
       for (const ZeroRun& r : chunk.zero_runs.at(ins.index)) zeros += r.length;
   return zeros;
+}
+
+// Stores the chunk issues for its outputs as printed without groups: one per StoreOutput;
+// for a block's zeros, one memset, or as ChunkPrinter::printZeros stores them, one per
+// group of four holding a zero and one per zero of a tail shorter than four.
+std::uint32_t storesWithoutGroups(const FunctionDefinition& f, const Chunk& chunk, std::uint32_t zeros_stored_maximum) {
+  std::uint32_t stores = 0;
+  for (const Instr& ins : chunk.code) {
+    if (ins.kind == InstrKind::StoreOutput) ++stores;
+    if (ins.kind != InstrKind::ZeroOutput) continue;
+    if (zerosOf(chunk, ins.block) > zeros_stored_maximum) {
+      ++stores;
+      continue;
+    }
+    const std::uint32_t size = f.outputs[ins.block].size();
+    std::uint32_t cleared_to = 0;
+    for (const ZeroRun& r : chunk.zero_runs.at(ins.index))
+      for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
+        ++stores;
+        if (k / 4 * 4 + 4 <= size) cleared_to = k / 4 * 4 + 4;
+      }
+  }
+  return stores;
 }
 
 }  // namespace
@@ -60,7 +66,8 @@ bool OutputGroupPlan::packs(std::uint32_t block, std::uint32_t start) const {
 OutputGroupPlan planOutputGroups(const FunctionDefinition& f, const Chunk& chunk, std::uint32_t zeros_stored_maximum) {
   OutputGroupPlan plan;
   plan.group_of.assign(chunk.code.size(), kNoGroup);
-  if (storesWithoutGroups(chunk) < kStoresPerOperationPacked * std::max<std::uint32_t>(chunk.operations, 1)) return plan;
+  const double operations = std::max<std::uint32_t>(chunk.operations, 1);
+  if (storesWithoutGroups(f, chunk, zeros_stored_maximum) < kStoresPerOperationPacked * operations) return plan;
   const auto w = writers(f, chunk);
   for (std::uint32_t b = 0; b < f.outputs.size(); ++b) {
     if (zerosOf(chunk, b) > zeros_stored_maximum) continue;  // cleared by a memset
