@@ -224,19 +224,12 @@ void ChunkPrinter::printZeros(std::uint32_t block, const std::vector<ZeroRun>& r
   // they overwrite the rest, and a frame Jacobian's scattered zeros take fewer stores.
   const std::string o = "o" + std::to_string(block);
   const std::uint32_t size = f_.outputs[block].size();
-  std::uint32_t cleared_to = 0;  // elements below this are cleared
-  for (const ZeroRun& r : runs)
-    for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
-      const std::uint32_t group = k / 4 * 4;
-      if (group + 4 <= size && groups_.packs(block, group)) {
-        cleared_to = group + 4;  // stored whole with its values (printGroupedStore)
-      } else if (group + 4 <= size) {
-        out_ << "  RD_ZERO4(" << address(o, group, 4) << ");\n";
-        cleared_to = group + 4;
-      } else {
-        out_ << "  " << element(o, k) << " = 0.0;\n";
-      }
-    }
+  forEachZeroStore(
+      runs, size,
+      [&](std::uint32_t group) {  // a group stored whole with its values is not cleared first
+        if (!groups_.packs(block, group)) out_ << "  RD_ZERO4(" << address(o, group, 4) << ");\n";
+      },
+      [&](std::uint32_t k) { out_ << "  " << element(o, k) << " = 0.0;\n"; });
 }
 
 void ChunkPrinter::printGroupedStore(const Instr& ins, std::uint32_t at) {

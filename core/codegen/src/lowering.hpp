@@ -23,6 +23,7 @@
 //    ("transfer" slots, also reused once their last reader is done).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -72,6 +73,23 @@ struct Instr {
 struct ZeroRun {
   std::uint32_t start = 0, length = 0;
 };
+
+// The stores that write a block's zero runs (`size` elements), in order: each group of
+// four from element 4k holding a zero once, group(4k), and each zero of a tail shorter
+// than four alone, single(k). What the single-knot printer emits and output groups count.
+template <class Group, class Single>
+void forEachZeroStore(const std::vector<ZeroRun>& runs, std::uint32_t size, Group group, Single single) {
+  std::uint32_t cleared_to = 0;  // elements below this are written
+  for (const ZeroRun& r : runs)
+    for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
+      if (k / 4 * 4 + 4 <= size) {
+        group(k / 4 * 4);
+        cleared_to = k / 4 * 4 + 4;
+      } else {
+        single(k);
+      }
+    }
+}
 
 struct Chunk {
   std::vector<Instr> code;

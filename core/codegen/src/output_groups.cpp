@@ -34,8 +34,7 @@ std::uint32_t zerosOf(const Chunk& chunk, std::uint32_t block) {
 }
 
 // Stores the chunk issues for its outputs as printed without groups: one per StoreOutput;
-// for a block's zeros, one memset, or as ChunkPrinter::printZeros stores them, one per
-// group of four holding a zero and one per zero of a tail shorter than four.
+// for a block's zeros, one memset, or those of forEachZeroStore.
 std::uint32_t storesWithoutGroups(const FunctionDefinition& f, const Chunk& chunk, std::uint32_t zeros_stored_maximum) {
   std::uint32_t stores = 0;
   for (const Instr& ins : chunk.code) {
@@ -45,13 +44,9 @@ std::uint32_t storesWithoutGroups(const FunctionDefinition& f, const Chunk& chun
       ++stores;
       continue;
     }
-    const std::uint32_t size = f.outputs[ins.block].size();
-    std::uint32_t cleared_to = 0;
-    for (const ZeroRun& r : chunk.zero_runs.at(ins.index))
-      for (std::uint32_t k = std::max(r.start, cleared_to); k < r.start + r.length; k = std::max(k + 1, cleared_to)) {
-        ++stores;
-        if (k / 4 * 4 + 4 <= size) cleared_to = k / 4 * 4 + 4;
-      }
+    forEachZeroStore(
+        chunk.zero_runs.at(ins.index), f.outputs[ins.block].size(), [&](std::uint32_t) { ++stores; },
+        [&](std::uint32_t) { ++stores; });
   }
   return stores;
 }
