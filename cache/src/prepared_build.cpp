@@ -1,8 +1,6 @@
 #include "robodiff/cache/prepared_build.hpp"
 
 #include <iterator>
-#include <map>
-#include <mutex>
 
 #include "robodiff/cache/target_check.hpp"
 #include "robodiff/codegen/compiler.hpp"
@@ -38,20 +36,6 @@ std::string generatorIdentity(const LibraryOptions& options, const std::string& 
          "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) + "; aba_value=" + methodName(b.aba_value) +
          "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
          "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
-}
-
-// The compiler's identity, asked once per compiler program in this process.
-std::string cachedCompilerIdentity(const codegen::CompilerOptions& options) {
-  static std::mutex mutex;
-  static std::map<std::string, std::string> known;
-  const std::string program = codegen::compilerProgram(options);
-  {
-    std::lock_guard lock(mutex);
-    if (const auto it = known.find(program); it != known.end()) return it->second;
-  }
-  std::string identity = codegen::compilerIdentity(options);  // slow: outside the lock
-  std::lock_guard lock(mutex);
-  return known.emplace(program, std::move(identity)).first->second;
 }
 
 std::string spaceSeparated(const std::vector<std::string>& words) {
@@ -104,7 +88,7 @@ std::vector<std::string> portableKeysFor(const std::string& model_hash, const Fu
 PreparedBuild prepareBuild(const Model& model, const std::string& model_hash, const FunctionSpec& spec,
                            const std::string& function_name, const std::string& compiler) {
   PreparedBuild p = prepareWithoutCompiler(model_hash, spec, function_name, compiler);
-  p.identity.compiler = cachedCompilerIdentity(compilerOptionsFor(spec.build, p.options.compiler));
+  p.identity.compiler = codegen::compilerIdentity(compilerOptionsFor(spec.build, p.options.compiler));
   p.key = p.identity.key();
 
   p.info.model_hash = model_hash;

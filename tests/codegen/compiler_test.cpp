@@ -130,8 +130,11 @@ TEST(Compiler, BinFalseIsAFailureWithNoOutput) {
 
 TEST(Compiler, TheTimeoutKillsTheCompiler) {
   TempDir dir;
-  // The shell's child (sleep) is killed with it: the whole process group goes.
-  const fs::path cc = script(dir, "slow-cc", "echo compiling...\nsleep 30\necho done");
+  // The shell's child (sleep) is killed with it: the whole process group goes. It tells
+  // its version like cc (asked before a build), then takes forever.
+  const fs::path cc = script(dir, "slow-cc",
+                             "case \"$1\" in --version) exec cc --version;; esac\n"
+                             "echo compiling...\nsleep 30\necho done");
   CompilerOptions o = quick(cc.string());
   o.timeout = std::chrono::milliseconds(300);
   const auto start = std::chrono::steady_clock::now();

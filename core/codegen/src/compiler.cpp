@@ -8,7 +8,10 @@
 #include <atomic>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <mutex>
 
+#include "gcc_passes.hpp"
 #include "robodiff/process/program_path.hpp"
 #include "subprocess.hpp"
 
@@ -144,6 +147,28 @@ std::string resolveCompiler(const CompilerOptions& options) {
   return path;
 }
 
+// The compiler's answer to --version (or to -v, tcc's) by `deadline`; empty when it
+// gives none. Answers are kept per program path for the life of the process: asked
+// once, they cost a build nothing more (a gcc answers in ~3 ms).
+std::string versionText(const std::string& path, Clock::time_point deadline) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> known;
+  {
+    std::lock_guard lock(mutex);
+    if (const auto it = known.find(path); it != known.end()) return it->second;
+  }
+  detail::ProcessLimits limits;
+  limits.deadline = deadline;
+  for (const char* flag : {"--version", "-v"}) {
+    const auto outcome = detail::runProcesses({{path, flag}}, limits).at(0);
+    if (outcome.ok() && !outcome.output.empty()) {
+      std::lock_guard lock(mutex);
+      return known.emplace(path, outcome.output).first->second;
+    }
+  }
+  return {};
+}
+
 // The commands that build `library` in `dir` into `temp`: one compile-and-link for a
 // single source; else one compile per source (run in parallel), then one link.
 struct BuildCommands {
@@ -252,13 +277,10 @@ std::vector<std::string> compilerFlags(const CompilerOptions& options) {
 
 std::string compilerIdentity(const CompilerOptions& options) {
   const std::string path = resolveCompiler(options);
-  detail::ProcessLimits limits;
-  limits.deadline = Clock::now() + std::chrono::seconds(30);
-  for (const char* flag : {"--version", "-v"}) {
-    auto outcome = detail::runProcesses({{path, flag}}, limits).at(0);
-    if (outcome.ok() && !outcome.output.empty()) return outcome.output.substr(0, outcome.output.find('\n'));
-  }
-  throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
+  const std::string text = versionText(path, Clock::now() + std::chrono::seconds(30));
+  if (text.empty())
+    throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
+  return text.substr(0, text.find('\n'));
 }
 
 CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& output, const CompilerOptions& options) {
@@ -267,6 +289,12 @@ CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& ou
   CompileReport report;
   report.compiler = resolveCompiler(options);
   report.flags = compilerFlags(options);
+  detail::ProcessLimits limits;
+  if (options.timeout.count() > 0) limits.deadline = started + options.timeout;
+  limits.address_space_bytes = options.memory_limit_bytes;
+  limits.jobs = options.jobs;
+  for (std::string& f : detail::gccPassToggles(versionText(report.compiler, limits.deadline)))
+    report.flags.push_back(std::move(f));
 
   BuildDirectory build(options);
   for (const auto& f : library.headers) writeFile(build.path(), f);
@@ -274,10 +302,6 @@ CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& ou
 
   const fs::path temp = temporaryLibraryPath(output);
   const BuildCommands commands = buildCommands(library, report, build.path(), temp);
-  detail::ProcessLimits limits;
-  if (options.timeout.count() > 0) limits.deadline = started + options.timeout;
-  limits.address_space_bytes = options.memory_limit_bytes;
-  limits.jobs = options.jobs;
   runCommands(commands.compile, limits, options, temp, report);
   runCommands(commands.link, limits, options, temp, report);
 

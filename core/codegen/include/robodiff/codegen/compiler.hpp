@@ -1,7 +1,8 @@
 // The compiler driver: generated sources in, a shared library out.
 //
 // It runs $CC (or `cc`) with flags from a fixed allowlist only (the optimisation level,
-// optionally -march=native and -ffast-math; -fPIC -shared always), each compiler
+// optionally -march=native and -ffast-math; -fPIC -shared always; and for gcc, the
+// passes generated code does not need turned off, src/gcc_passes.hpp), each compiler
 // process under a wall-clock deadline and an address-space limit, keeps what the
 // compiler printed (a failure reports it), compiles the parts of a split library in
 // parallel, and writes the library atomically (a temporary name, then rename), so a
@@ -79,11 +80,13 @@ CompileReport compileLibrary(const GeneratedLibrary& library, const std::filesys
 // The program options.compiler (or $CC, or cc) names.
 std::string compilerProgram(const CompilerOptions& options);
 
-// The flags options lead to (the allowlist), as passed to every compiler command.
+// The flags options lead to (the allowlist), as passed to every compiler command; a
+// build with gcc adds its pass toggles (CompileReport::flags has them all).
 std::vector<std::string> compilerFlags(const CompilerOptions& options);
 
 // The compiler's first line of `--version` (or of `-v`, for tcc): its identity for
-// cache keys. Throws CompileError when it cannot be run.
+// cache keys. Asked once per compiler in a process. Throws CompileError when it cannot
+// be run.
 std::string compilerIdentity(const CompilerOptions& options);
 
 }  // namespace robodiff::codegen
