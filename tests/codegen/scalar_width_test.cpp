@@ -1,4 +1,4 @@
-// Single-knot code at most 128 bits wide (RD_SCALAR_FN in c_emitter.cpp): on AVX-512 CPUs
+// Single-knot code at most 128 bits wide (RD_SCALAR_FN, or the file's target, in c_prologue.cpp): on AVX-512 CPUs
 // gcc otherwise packs independent stores into 512-bit registers, measured 25% slower per
 // call (docs/code-generation.md); the batched code keeps the full width. Checked on the
 // compiled library's disassembly, against the same source with the attribute taken out.
@@ -57,6 +57,32 @@ TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot
   EXPECT_EQ(eval_with.find("zmm"), std::string::npos) << eval_with;
   // The batched entry point (its chunk inlined there) keeps the full width.
   EXPECT_NE(runCommand("objdump -d --no-show-raw-insn " + with.string()).out.find("zmm"), std::string::npos);
+}
+
+// A library without batched code ("batch": false) takes the preference once, at the top of
+// the file, for every function: one target, so gcc sets up its register tables once
+// instead of twice. No function of it uses 512-bit registers.
+TEST(ScalarWidth, ALibraryWithoutBatchedCodeIsOneTargetAtMost128BitsWide) {
+  if (!cpuHasFlag("avx512f")) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
+  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
+  Graph g;
+  FunctionDefinition f = chainFunction(g, "fk", 12);
+  CodegenOptions options;
+  options.split_threshold = 1u << 30;
+  options.batch_width = 1;  // no batched chunk: eval_batch loops over eval
+  GeneratedLibrary lib = generateLibrary(g, {f}, options);
+  std::string& text = lib.sources.at(0).text;
+  EXPECT_EQ(text.find("__attribute__((target("), std::string::npos) << "a second target in the file";
+  const std::string pragma = "#pragma GCC target(\"prefer-vector-width=128\")";
+  ASSERT_NE(text.find(pragma), std::string::npos);
+  EXPECT_LT(text.find(pragma), text.find("#include")) << "it must come before every function, the headers' too";
+  TempDir dir;
+  const std::filesystem::path with = compiled(lib, dir / "with.so");
+  EXPECT_EQ(runCommand("objdump -d --no-show-raw-insn " + with.string()).out.find("zmm"), std::string::npos);
+  text.replace(text.find(pragma), pragma.size(), "");
+  const std::filesystem::path without = compiled(lib, dir / "without.so");
+  if (disassembly(without, "rd_fk_eval").find("zmm") == std::string::npos)
+    std::cout << "note: gcc does not pack rd_fk_eval into 512-bit registers on this CPU even without the pragma\n";
 }
 
 // A block with up to 256 structural zeros: a memset there costs ~35 ns before anything
