@@ -29,14 +29,26 @@ std::filesystem::path compiled(const GeneratedLibrary& lib, const std::filesyste
   return compileLibrary(lib, out, options).library;
 }
 
-TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot) {
-  if (!cpuHasFlag("avx512f")) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
-  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
-  Graph g;
-  FunctionDefinition f = chainFunction(g, "fk", 12);
+// Why a width check cannot run here; empty when it can.
+std::string whyNoWidthCheck() {
+  if (!cpuHasFlag("avx512f")) return "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
+  if (!haveProgram("gcc") || !haveProgram("objdump")) return "needs gcc and objdump";
+  return "";
+}
+
+// A 12-joint chain's forward kinematics in one part (rd_fk_eval), batched `batch_width`
+// knots at a time (1: no batched code).
+GeneratedLibrary chainLibrary(Graph& g, std::uint32_t batch_width) {
   CodegenOptions options;
-  options.split_threshold = 1u << 30;  // one part: rd_fk_eval
-  GeneratedLibrary lib = generateLibrary(g, {f}, options);
+  options.split_threshold = 1u << 30;
+  options.batch_width = batch_width;
+  return generateLibrary(g, {chainFunction(g, "fk", 12)}, options);
+}
+
+TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot) {
+  if (const std::string why = whyNoWidthCheck(); !why.empty()) GTEST_SKIP() << why;
+  Graph g;
+  GeneratedLibrary lib = chainLibrary(g, 0);  // the batch width the target chooses
   TempDir dir;
   const std::filesystem::path with = compiled(lib, dir / "with.so");
   // The same source with the attribute taken out: what gcc does on its own.
@@ -63,14 +75,9 @@ TEST(ScalarWidth, SingleKnotCodeStaysOff512BitRegistersAndTheBatchedChunkDoesNot
 // the file, for every function: one target, so gcc sets up its register tables once
 // instead of twice. No function of it uses 512-bit registers.
 TEST(ScalarWidth, ALibraryWithoutBatchedCodeIsOneTargetAtMost128BitsWide) {
-  if (!cpuHasFlag("avx512f")) GTEST_SKIP() << "this CPU has no AVX-512: -march=native cannot use 512-bit registers";
-  if (!haveProgram("gcc") || !haveProgram("objdump")) GTEST_SKIP() << "needs gcc and objdump";
+  if (const std::string why = whyNoWidthCheck(); !why.empty()) GTEST_SKIP() << why;
   Graph g;
-  FunctionDefinition f = chainFunction(g, "fk", 12);
-  CodegenOptions options;
-  options.split_threshold = 1u << 30;
-  options.batch_width = 1;  // no batched chunk: eval_batch loops over eval
-  GeneratedLibrary lib = generateLibrary(g, {f}, options);
+  GeneratedLibrary lib = chainLibrary(g, 1);  // no batched chunk: eval_batch loops over eval
   std::string& text = lib.sources.at(0).text;
   EXPECT_EQ(text.find("__attribute__((target("), std::string::npos) << "a second target in the file";
   const std::string pragma = "#pragma GCC target(\"prefer-vector-width=128\")";
