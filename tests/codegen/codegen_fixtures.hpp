@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "robodiff/codegen/c_emitter.hpp"
+#include "robodiff/codegen/compiler.hpp"
 #include "robodiff/codegen/function_definition.hpp"
 #include "robodiff/symbolic/graph.hpp"
 #include "support/temp_dir.hpp"
@@ -77,5 +78,18 @@ bool cpuHasFlag(const std::string& flag);
 
 // The disassembly of function `symbol` in `library` (objdump -d); empty when it is not there.
 std::string disassembly(const std::filesystem::path& library, const std::string& symbol);
+
+// The shared libraries `library` names as needed (readelf -d; binutils come with gcc).
+std::vector<std::string> neededLibraries(const std::filesystem::path& library);
+
+// y = sin(x) as function "f": its code calls libm's sincos beyond the sin-cos kernel's
+// range (|x| > 2^19).
+GeneratedLibrary sinLibrary(Graph& g);
+
+// Function "f" of the compiled library `library` (one input, one output) at x.
+double evaluateAt(const std::filesystem::path& library, double x);
+
+// The default options with `compiler` as the compiler.
+CompilerOptions withCompiler(const std::string& compiler);
 
 }  // namespace robodiff::codegen::testing

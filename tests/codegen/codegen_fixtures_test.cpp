@@ -315,6 +315,42 @@ std::string disassembly(const std::filesystem::path& library, const std::string&
   return all.substr(begin, all.find("\n\n", begin) - begin);
 }
 
+std::vector<std::string> neededLibraries(const std::filesystem::path& library) {
+  std::istringstream lines(robodiff::testing::runCommand("readelf -d '" + library.string() + "'").out);
+  std::vector<std::string> needed;
+  const std::string tag = "Shared library: [";
+  for (std::string line; std::getline(lines, line);) {
+    const auto at = line.find(tag);
+    if (line.find("(NEEDED)") == std::string::npos || at == std::string::npos) continue;
+    const auto first = at + tag.size();
+    needed.push_back(line.substr(first, line.find(']', first) - first));
+  }
+  return needed;
+}
+
+GeneratedLibrary sinLibrary(Graph& g) {
+  const NodeId x = g.input(0);
+  FunctionDefinition f{"f", {{"x", 1}}, {OutputBlock::dense("y", 1, 1, {g.unary(Op::Sin, x)})}};
+  return generateLibrary(g, {f});
+}
+
+double evaluateAt(const std::filesystem::path& library, double x) {
+  const LoadedLibrary lib = LoadedLibrary::open(library);
+  const CompiledFunction f = lib.function("f");
+  double y = 0.0;
+  const double* in[] = {&x};
+  double* out[] = {&y};
+  std::vector<double> work(f.workSize() + 1);
+  f.evaluate(in, out, work.data());
+  return y;
+}
+
+CompilerOptions withCompiler(const std::string& compiler) {
+  CompilerOptions o;
+  o.compiler = compiler;
+  return o;
+}
+
 TEST(CodegenFixtures, RandomFunctionsUseEveryOpAndStayFinite) {
   for (std::uint32_t seed : {1u, 2u, 3u}) {
     Graph g;

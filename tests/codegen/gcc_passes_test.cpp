@@ -53,29 +53,6 @@ TEST(GccPasses, OtherCompilersOlderGccAndUnreadableTextsGetNone) {
   EXPECT_NO_THROW(gccPassToggles("cc 123456789012345678901234567890.1.1\nFree Software Foundation\n"));
 }
 
-GeneratedLibrary sinLibrary(Graph& g) {
-  const NodeId x = g.input(0);
-  FunctionDefinition f{"f", {{"x", 1}}, {OutputBlock::dense("y", 1, 1, {g.unary(Op::Sin, x)})}};
-  return generateLibrary(g, {f});
-}
-
-CompilerOptions withCompiler(const std::string& compiler) {
-  CompilerOptions o;
-  o.compiler = compiler;
-  return o;
-}
-
-double evaluate(const std::filesystem::path& library, double x) {
-  const LoadedLibrary lib = LoadedLibrary::open(library);
-  const CompiledFunction f = lib.function("f");
-  double y = 0.0;
-  const double* in[] = {&x};
-  double* out[] = {&y};
-  std::vector<double> work(f.workSize() + 1);
-  f.evaluate(in, out, work.data());
-  return y;
-}
-
 TEST(GccPasses, AGccBuildPassesThemToEveryCommand) {
   Graph g;
   TempDir dir;
@@ -86,7 +63,7 @@ TEST(GccPasses, AGccBuildPassesThemToEveryCommand) {
   for (std::size_t i = base.size(); i < r.flags.size(); ++i) {
     for (const std::string& command : r.commands) EXPECT_NE(command.find(r.flags[i]), std::string::npos) << command;
   }
-  EXPECT_NEAR(evaluate(r.library, 0.5), std::sin(0.5), 1e-15);
+  EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-15);
 }
 
 TEST(GccPasses, ClangAndTccBuildsDoNotGetThem) {
@@ -99,7 +76,7 @@ TEST(GccPasses, ClangAndTccBuildsDoNotGetThem) {
     TempDir dir;
     const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", withCompiler(compiler));
     EXPECT_EQ(r.flags, compilerFlags(withCompiler(compiler))) << compiler;
-    EXPECT_NEAR(evaluate(r.library, 0.5), std::sin(0.5), 1e-15) << compiler;
+    EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-15) << compiler;
   }
 }
 

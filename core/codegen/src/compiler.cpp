@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "gcc_passes.hpp"
+#include "lean_link.hpp"
 #include "robodiff/process/program_path.hpp"
 #include "subprocess.hpp"
 
@@ -175,23 +176,29 @@ struct BuildCommands {
   std::vector<std::vector<std::string>> compile, link;
 };
 
-BuildCommands buildCommands(const GeneratedLibrary& library, const CompileReport& report, const fs::path& dir,
-                            const fs::path& temp) {
+BuildCommands buildCommands(const GeneratedLibrary& library, const CompileReport& report,
+                            const detail::LinkArguments& linking, const fs::path& dir, const fs::path& temp) {
   auto base = [&] {
     std::vector<std::string> argv{report.compiler};
     argv.insert(argv.end(), report.flags.begin(), report.flags.end());
     argv.push_back("-I" + dir.string());
     return argv;
   };
+  auto linkInto = [&](std::vector<std::string>& argv, const std::vector<std::string>& inputs) {
+    argv.insert(argv.end(), {"-shared", "-o", temp.string()});
+    argv.insert(argv.end(), linking.before_inputs.begin(), linking.before_inputs.end());
+    argv.insert(argv.end(), inputs.begin(), inputs.end());
+    argv.insert(argv.end(), linking.libraries.begin(), linking.libraries.end());
+  };
   BuildCommands commands;
   if (library.sources.size() == 1) {
     auto argv = base();
-    argv.insert(argv.end(), {"-shared", "-o", temp.string(), (dir / library.sources[0].path).string(), "-lm"});
+    argv.insert(argv.end(), linking.single_command.begin(), linking.single_command.end());
+    linkInto(argv, {(dir / library.sources[0].path).string()});
     commands.compile.push_back(argv);
     return commands;
   }
-  auto link_argv = base();
-  link_argv.insert(link_argv.end(), {"-shared", "-o", temp.string()});
+  std::vector<std::string> objects;
   for (const auto& src : library.sources) {
     const fs::path source = dir / src.path;
     fs::path object = source;
@@ -199,9 +206,10 @@ BuildCommands buildCommands(const GeneratedLibrary& library, const CompileReport
     auto argv = base();
     argv.insert(argv.end(), {"-c", "-o", object.string(), source.string()});
     commands.compile.push_back(argv);
-    link_argv.push_back(object.string());
+    objects.push_back(object.string());
   }
-  link_argv.push_back("-lm");
+  auto link_argv = base();
+  linkInto(link_argv, objects);
   commands.link.push_back(link_argv);
   return commands;
 }
@@ -293,15 +301,16 @@ CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& ou
   if (options.timeout.count() > 0) limits.deadline = started + options.timeout;
   limits.address_space_bytes = options.memory_limit_bytes;
   limits.jobs = options.jobs;
-  for (std::string& f : detail::gccPassToggles(versionText(report.compiler, limits.deadline)))
-    report.flags.push_back(std::move(f));
+  const std::string version_text = versionText(report.compiler, limits.deadline);
+  for (std::string& f : detail::gccPassToggles(version_text)) report.flags.push_back(std::move(f));
 
   BuildDirectory build(options);
   for (const auto& f : library.headers) writeFile(build.path(), f);
   for (const auto& f : library.sources) writeFile(build.path(), f);
 
   const fs::path temp = temporaryLibraryPath(output);
-  const BuildCommands commands = buildCommands(library, report, build.path(), temp);
+  const BuildCommands commands =
+      buildCommands(library, report, detail::linkArguments(version_text), build.path(), temp);
   runCommands(commands.compile, limits, options, temp, report);
   runCommands(commands.link, limits, options, temp, report);
 

@@ -1,6 +1,6 @@
 #include "gcc_passes.hpp"
 
-#include <regex>
+#include "compiler_family.hpp"
 
 namespace robodiff::codegen::detail {
 namespace {
@@ -21,18 +21,6 @@ const char* const kToggles[] = {
     // A function or two per file, with one branch at most: nothing to fold or thread.
     "-fno-ipa-icf", "-fno-ipa-modref", "-fno-thread-jumps", "-fno-tree-dominator-opts", "-fno-tree-tail-merge",
     "-fno-crossjumping"};
-
-bool isGnuGcc(const std::string& text) {
-  return text.find("Free Software Foundation") != std::string::npos && text.find("clang") == std::string::npos;
-}
-
-// The major version on the first line ("cc (Debian 12.2.0-14) 12.2.0" -> 12); 0 if none.
-int majorVersion(const std::string& text) {
-  static const std::regex version(R"((\d{1,4})\.\d+\.\d+)");  // at most 4 digits: no overflow
-  const std::string first_line = text.substr(0, text.find('\n'));
-  std::smatch m;
-  return std::regex_search(first_line, m, version) ? std::stoi(m[1].str()) : 0;
-}
 
 }  // namespace
 
