@@ -1,8 +1,8 @@
 // The lean link (src/lean_link.hpp): which compilers get it, read from their --version;
 // a gcc build's library needs libm and nothing else, loads, and computes sin inside and
 // beyond the sin-cos kernel's range (libm's sincos, resolved at load time), single and
-// split; loading a -ffast-math library leaves the floating-point mode alone; clang and
-// tcc builds link as before.
+// split; clang builds link without start files, tcc builds as before; loading a
+// -ffast-math library leaves the floating-point mode alone.
 #include "lean_link.hpp"
 
 #if defined(__x86_64__)
@@ -39,9 +39,12 @@ TEST(LeanLink, GnuGccLinksWithoutStartFilesOrTheCLibrary) {
   EXPECT_EQ(gcc.single_command, Strings{"-pipe"});
 }
 
-TEST(LeanLink, OtherCompilersLinkAsBefore) {
-  for (const char* text : {"Debian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu\n",
-                           "tcc version 0.9.27 (x86_64 Linux)\n", ""}) {
+TEST(LeanLink, ClangLinksWithoutStartFilesAndOthersAsBefore) {
+  const auto clang = linkArguments("Debian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu\n");
+  EXPECT_EQ(clang.before_inputs, Strings{"-nostartfiles"});
+  EXPECT_EQ(clang.libraries, Strings{"-lm"});
+  EXPECT_TRUE(clang.single_command.empty());
+  for (const char* text : {"tcc version 0.9.27 (x86_64 Linux)\n", ""}) {
     const auto other = linkArguments(text);
     EXPECT_TRUE(other.before_inputs.empty()) << text;
     EXPECT_EQ(other.libraries, Strings{"-lm"}) << text;
@@ -79,24 +82,31 @@ TEST(LeanLink, ASplitGccLibraryLinksLeanAndItsPartsCompileApart) {
 }
 
 #if defined(__x86_64__)
-// gcc 12 links crtfastmath.o into a -ffast-math -shared library: its constructor turns on
-// flush-to-zero and denormals-are-zero in the thread that loads it, for every library
-// that thread runs. Without start files it is not linked.
-TEST(LeanLink, LoadingAFastMathGccLibraryLeavesTheFloatingPointModeAlone) {
-  Graph g;
-  TempDir dir;
-  CompilerOptions options = withCompiler("gcc");
-  options.fast_math = true;
-  const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", options);
-  const unsigned before = _mm_getcsr();
-  const LoadedLibrary lib = LoadedLibrary::open(r.library);
-  EXPECT_EQ(_mm_getcsr(), before) << "loading the library changed MXCSR (0x8000 flush-to-zero, 0x40 denormals-are-zero)";
-  _mm_setcsr(before);
-  EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-14);
+// gcc 12 and clang 14 link crtfastmath.o into a -ffast-math -shared library: its
+// constructor turns on flush-to-zero and denormals-are-zero in the thread that loads it,
+// for every library that thread runs. Without start files it is not linked.
+TEST(LeanLink, LoadingAFastMathLibraryLeavesTheFloatingPointModeAlone) {
+  for (const char* compiler : {"gcc", "clang"}) {
+    if (!haveProgram(compiler)) {
+      std::cout << compiler << " is not installed: not checked\n";
+      continue;
+    }
+    Graph g;
+    TempDir dir;
+    CompilerOptions options = withCompiler(compiler);
+    options.fast_math = true;
+    const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", options);
+    const unsigned before = _mm_getcsr();
+    const LoadedLibrary lib = LoadedLibrary::open(r.library);
+    EXPECT_EQ(_mm_getcsr(), before) << compiler << ": loading the library changed MXCSR (0x8000 flush-to-zero, "
+                                    << "0x40 denormals-are-zero)";
+    _mm_setcsr(before);
+    EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-14) << compiler;
+  }
 }
 #endif
 
-TEST(LeanLink, ClangAndTccBuildsLinkTheCLibrary) {
+TEST(LeanLink, ClangAndTccBuildsKeepTheCLibrary) {
   for (const char* compiler : {"clang", "tcc"}) {
     if (!haveProgram(compiler)) {
       std::cout << compiler << " is not installed: not checked\n";
@@ -106,6 +116,7 @@ TEST(LeanLink, ClangAndTccBuildsLinkTheCLibrary) {
     TempDir dir;
     const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", withCompiler(compiler));
     EXPECT_FALSE(mentions(r.commands, "-nostdlib")) << compiler;
+    EXPECT_EQ(mentions(r.commands, "-nostartfiles"), std::string(compiler) == "clang") << compiler;
     const Strings needed = neededLibraries(r.library);
     EXPECT_NE(std::find(needed.begin(), needed.end(), "libc.so.6"), needed.end()) << compiler;
     EXPECT_NEAR(evaluateAt(r.library, 1e6), std::sin(1e6), 1e-15) << compiler;

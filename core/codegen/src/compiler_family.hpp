@@ -10,6 +10,9 @@ namespace robodiff::codegen::detail {
 // names the Free Software Foundation and not clang.
 bool isGnuGcc(const std::string& version_text);
 
+// LLVM's clang (Debian's "clang version 14.0.6", Apple's, ...).
+bool isClang(const std::string& version_text);
+
 // The major version on the text's first line ("cc (Debian 12.2.0-14) 12.2.0" -> 12);
 // 0 when it has none.
 int majorVersion(const std::string& version_text);

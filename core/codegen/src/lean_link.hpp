@@ -15,8 +15,9 @@ struct LinkArguments {
 };
 
 // For the compiler whose `--version` printed `version_text`. GNU's gcc: no start files,
-// no C library (-nostdlib), then libm and libgcc; one command through pipes. Any
-// other compiler, or a text it cannot read: its default link, and libm.
+// no C library (-nostdlib), then libm and libgcc; one command through pipes. clang: no
+// start files (-nostartfiles), libm. Any other compiler, or a text it cannot read: its
+// default link, and libm.
 LinkArguments linkArguments(const std::string& version_text);
 
 }  // namespace robodiff::codegen::detail
