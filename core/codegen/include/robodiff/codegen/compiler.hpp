@@ -1,9 +1,9 @@
 // The compiler driver: generated sources in, a shared library out.
 //
 // It runs $CC (or `cc`) with flags from a fixed allowlist only (the optimisation level,
-// optionally -march=native and -ffast-math; -fPIC -shared always; and for gcc, the
-// passes generated code does not need turned off, src/gcc_passes.hpp, and a link
-// against libm alone, src/lean_link.hpp), each compiler
+// optionally -march=native and -ffast-math; -fPIC -shared always; for gcc, the passes
+// generated code does not need turned off, src/gcc_passes.hpp; for gcc and clang, a
+// link without start files, src/lean_link.hpp), each compiler
 // process under a wall-clock deadline and an address-space limit, keeps what the
 // compiler printed (a failure reports it), compiles the parts of a split library in
 // parallel, and writes the library atomically (a temporary name, then rename), so a
