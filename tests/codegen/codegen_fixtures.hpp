@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -91,5 +92,10 @@ double evaluateAt(const std::filesystem::path& library, double x);
 
 // The default options with `compiler` as the compiler.
 CompilerOptions withCompiler(const std::string& compiler);
+
+// sinLibrary built in a fresh directory with `options` by each of `compilers` that is
+// installed (a message for each that is not); `check` gets the compiler and the report.
+void forEachInstalledCompiler(const std::vector<std::string>& compilers, CompilerOptions options,
+                              const std::function<void(const std::string&, const CompileReport&)>& check);
 
 }  // namespace robodiff::codegen::testing

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -349,6 +350,20 @@ CompilerOptions withCompiler(const std::string& compiler) {
   CompilerOptions o;
   o.compiler = compiler;
   return o;
+}
+
+void forEachInstalledCompiler(const std::vector<std::string>& compilers, CompilerOptions options,
+                              const std::function<void(const std::string&, const CompileReport&)>& check) {
+  for (const std::string& compiler : compilers) {
+    if (!haveProgram(compiler)) {
+      std::cout << compiler << " is not installed: not checked\n";
+      continue;
+    }
+    Graph g;
+    robodiff::testing::TempDir dir;
+    options.compiler = compiler;
+    check(compiler, compileLibrary(sinLibrary(g), dir / "lib.so", options));
+  }
 }
 
 TEST(CodegenFixtures, RandomFunctionsUseEveryOpAndStayFinite) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>
 
 #include <gtest/gtest.h>
 
@@ -67,17 +66,10 @@ TEST(GccPasses, AGccBuildPassesThemToEveryCommand) {
 }
 
 TEST(GccPasses, ClangAndTccBuildsDoNotGetThem) {
-  for (const char* compiler : {"clang", "tcc"}) {
-    if (!haveProgram(compiler)) {
-      std::cout << compiler << " is not installed: not checked\n";
-      continue;
-    }
-    Graph g;
-    TempDir dir;
-    const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", withCompiler(compiler));
+  forEachInstalledCompiler({"clang", "tcc"}, {}, [](const std::string& compiler, const CompileReport& r) {
     EXPECT_EQ(r.flags, compilerFlags(withCompiler(compiler))) << compiler;
     EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-15) << compiler;
-  }
+  });
 }
 
 }  // namespace

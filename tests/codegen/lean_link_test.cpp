@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>
 
 #include <gtest/gtest.h>
 
@@ -86,41 +85,27 @@ TEST(LeanLink, ASplitGccLibraryLinksLeanAndItsPartsCompileApart) {
 // constructor turns on flush-to-zero and denormals-are-zero in the thread that loads it,
 // for every library that thread runs. Without start files it is not linked.
 TEST(LeanLink, LoadingAFastMathLibraryLeavesTheFloatingPointModeAlone) {
-  for (const char* compiler : {"gcc", "clang"}) {
-    if (!haveProgram(compiler)) {
-      std::cout << compiler << " is not installed: not checked\n";
-      continue;
-    }
-    Graph g;
-    TempDir dir;
-    CompilerOptions options = withCompiler(compiler);
-    options.fast_math = true;
-    const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", options);
+  CompilerOptions fast;
+  fast.fast_math = true;
+  forEachInstalledCompiler({"gcc", "clang"}, fast, [](const std::string& compiler, const CompileReport& r) {
     const unsigned before = _mm_getcsr();
     const LoadedLibrary lib = LoadedLibrary::open(r.library);
     EXPECT_EQ(_mm_getcsr(), before) << compiler << ": loading the library changed MXCSR (0x8000 flush-to-zero, "
                                     << "0x40 denormals-are-zero)";
     _mm_setcsr(before);
     EXPECT_NEAR(evaluateAt(r.library, 0.5), std::sin(0.5), 1e-14) << compiler;
-  }
+  });
 }
 #endif
 
 TEST(LeanLink, ClangAndTccBuildsKeepTheCLibrary) {
-  for (const char* compiler : {"clang", "tcc"}) {
-    if (!haveProgram(compiler)) {
-      std::cout << compiler << " is not installed: not checked\n";
-      continue;
-    }
-    Graph g;
-    TempDir dir;
-    const CompileReport r = compileLibrary(sinLibrary(g), dir / "lib.so", withCompiler(compiler));
+  forEachInstalledCompiler({"clang", "tcc"}, {}, [](const std::string& compiler, const CompileReport& r) {
     EXPECT_FALSE(mentions(r.commands, "-nostdlib")) << compiler;
-    EXPECT_EQ(mentions(r.commands, "-nostartfiles"), std::string(compiler) == "clang") << compiler;
+    EXPECT_EQ(mentions(r.commands, "-nostartfiles"), compiler == "clang") << compiler;
     const Strings needed = neededLibraries(r.library);
     EXPECT_NE(std::find(needed.begin(), needed.end(), "libc.so.6"), needed.end()) << compiler;
     EXPECT_NEAR(evaluateAt(r.library, 1e6), std::sin(1e6), 1e-15) << compiler;
-  }
+  });
 }
 
 }  // namespace
