@@ -1,5 +1,5 @@
-// How the driver links a library: with gcc, against libm alone (docs/code-generation.md,
-// "A lean link"). Internal to the compiler driver.
+// How the driver links a library: with gcc against libm alone, with clang without start
+// files (docs/code-generation.md, "A lean link"). Internal to the compiler driver.
 #pragma once
 
 #include <string>
