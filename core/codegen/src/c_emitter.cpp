@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 #include "c_prologue.hpp"
 #include "chunk_printer.hpp"
 #include "compact_addressing.hpp"
+#include "entry_kernels.hpp"
 #include "lane_pairs.hpp"
 #include "lowering.hpp"
 
@@ -28,11 +30,13 @@ using detail::Flavour;
 using detail::LoweredFunction;
 
 // Single-knot functions below this many operations whose sin-cos kernels all take
-// inputs check those inputs' range once, at entry, instead of in every kernel call; a
-// second, cold copy of the body (per-call checks) serves arguments beyond the range.
-// Measured (docs/code-generation.md): the frame Jacobians of the Panda and Talos
-// free-flyer (131-175 operations) ran 7-8% faster; the Panda's CRBA and RNEA (502, 973)
-// 0-3% slower, and their compilation took 30-45% longer.
+// inputs check those inputs' range once, at entry, instead of in every kernel call.
+// Where every operation waits on a kernel, the kernels are computed at entry and the
+// body compiled once (entry_kernels.hpp); elsewhere a second, cold copy of the body
+// (per-call checks) serves arguments beyond the range. Measured (docs/code-generation.md):
+// the frame Jacobians of the Panda and Talos free-flyer (131-175 operations) ran 7-8%
+// faster with the copy; the Panda's CRBA and RNEA (502, 973) 0-3% slower, and their
+// compilation took 30-45% longer.
 constexpr std::uint32_t kEntryRangeCheckBelow = 256;
 
 // A function lowered for C: without lane pairs (the batched code, and compilers without
@@ -152,32 +156,54 @@ std::string scalarPart(const FunctionDefinition& f, const Lowerings& l, const st
          scalar.print(signature, l.plain.chunks[p], false, table) + "#endif\n";
 }
 
-// A function in one part, in library.c: its single-knot entry point, with the kernels'
-// range checked at entry where that pays (a cold exact copy beside it), and its batched
-// chunk.
-void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, std::ostream& main) {
+// The single-knot entry point of a function whose kernels all run at its entry
+// (entry_kernels.hpp): one body; compilers without vector types check in every call.
+void emitKernelsAtEntry(const FunctionDefinition& f, const Lowerings& l, const std::vector<detail::EntryKernel>& kernels,
+                        std::ostream& main) {
+  ChunkPrinter scalar(f, Flavour::Scalar), at_entry(f, Flavour::Scalar);
+  at_entry.kernelsAtEntry(kernels, l.plain.sincos_inputs);
+  scalar.packOutputGroups(true);
+  at_entry.packOutputGroups(true);
+  const std::string signature = "RD_SCALAR_FN static void " + prefixOf(f) + "_eval" + kEvalParams;
+  main << "#if RD_PAIRS\n"
+       << at_entry.print(signature, l.paired.chunks[0]) << "#else\n"
+       << scalar.print(signature, l.plain.chunks[0]) << "#endif\n\n";
+}
+
+// The single-knot entry point of a function whose kernels' arguments are checked at its
+// entry: the body with unchecked kernels, inlined, and a cold copy with per-call checks.
+void emitColdCopy(const FunctionDefinition& f, const Lowerings& l, std::ostream& main) {
   const std::string prefix = prefixOf(f);
+  ChunkPrinter scalar(f, Flavour::Scalar), in_range(f, Flavour::Scalar);
+  in_range.inRangeKernels(true);
+  scalar.packOutputGroups(true);
+  in_range.packOutputGroups(true);
+  main << "#if RD_PAIRS\n"
+       << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
+                         l.paired.chunks[0])
+       << scalar.print("RD_SCALAR_FN RD_COLD static void " + prefix + "_exact" + kEvalParams, l.plain.chunks[0])
+       << detail::rangeCheckedEntry(prefix, l.plain.sincos_inputs) << "#else\n"
+       << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, l.plain.chunks[0])
+       << "#endif\n\n";
+}
+
+// A function in one part, in library.c: its single-knot entry point, with the kernels'
+// range checked at entry where that pays (the kernels at entry, or a cold exact copy
+// beside the body), and its batched chunk.
+void emitWhole(const FunctionDefinition& f, const Lowerings& l, bool batched, std::ostream& main) {
   const LoweredFunction& lowered = l.plain;
   const bool checked_at_entry = !l.compact && anyPairs(l) && !lowered.sincos_inputs.empty() &&
                                 lowered.operations < kEntryRangeCheckBelow;
-  if (checked_at_entry) {
-    ChunkPrinter scalar(f, Flavour::Scalar), in_range(f, Flavour::Scalar);
-    in_range.inRangeKernels(true);
-    scalar.packOutputGroups(true);
-    in_range.packOutputGroups(true);
-    main << "#if RD_PAIRS\n"
-         << in_range.print("RD_SCALAR_FN static inline RD_ALWAYS_INLINE void " + prefix + "_in_range" + kEvalParams,
-                           l.paired.chunks[0])
-         << scalar.print("RD_SCALAR_FN RD_COLD static void " + prefix + "_exact" + kEvalParams, lowered.chunks[0])
-         << detail::rangeCheckedEntry(prefix, lowered.sincos_inputs) << "#else\n"
-         << scalar.print("RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, lowered.chunks[0])
-         << "#endif\n\n";
-  } else {
-    main << scalarPart(f, l, "RD_SCALAR_FN static void " + prefix + "_eval" + kEvalParams, 0) << "\n";
-  }
+  const auto kernels = checked_at_entry ? detail::entryKernels(l.paired.chunks[0]) : std::nullopt;
+  if (kernels)
+    emitKernelsAtEntry(f, l, *kernels, main);
+  else if (checked_at_entry)
+    emitColdCopy(f, l, main);
+  else
+    main << scalarPart(f, l, "RD_SCALAR_FN static void " + prefixOf(f) + "_eval" + kEvalParams, 0) << "\n";
   if (batched) {
     ChunkPrinter vector(f, Flavour::Vector);
-    main << "#if RD_VECTOR\n" << vector.print("static void " + prefix + "_chunk" + kEvalParams, lowered.chunks[0], true)
+    main << "#if RD_VECTOR\n" << vector.print("static void " + prefixOf(f) + "_chunk" + kEvalParams, lowered.chunks[0], true)
          << "#endif\n\n";
   }
 }

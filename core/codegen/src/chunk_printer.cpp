@@ -86,9 +86,47 @@ std::string ChunkPrinter::printOnce(const std::string& signature, const Chunk& c
   // 1.9-2.1 with. Blocks with structural zeros are cleared anyway (ZeroOutput).
   for (std::uint32_t b : claimed)
     out_ << "  memset(o" << b << ", 0, RD_W * " << f_.outputs[b].size() << " * sizeof(double)); /* claim the lines */\n";
-  for (const Instr& ins : chunk.code) printInstr(ins, chunk);
+  entry_unit_.clear();
+  if (entry_kernels_) {
+    entry_unit_.assign(chunk.code.size(), -1);
+    std::int64_t unit = 0;
+    for (const EntryKernel& k : *entry_kernels_) {
+      entry_unit_.at(k.at) = unit;
+      unit += static_cast<std::int64_t>(k.units.size());
+    }
+    const EntryBlock block = entryKernelBlock(*entry_kernels_, *entry_angles_);
+    out_ << block.head;
+    for (const Instr& ins : chunk.code)
+      if (ins.kind == InstrKind::ZeroOutput) printInstr(ins, chunk);
+    out_ << block.kernels;
+  }
+  for (const Instr& ins : chunk.code)
+    if (!entry_kernels_ || ins.kind != InstrKind::ZeroOutput) printInstr(ins, chunk);
   out_ << "}\n";
   return out_.str();
+}
+
+bool ChunkPrinter::atEntry(const Instr& ins, const Chunk& chunk) {
+  if (entry_unit_.empty()) return false;
+  const std::int64_t unit = entry_unit_.at(static_cast<std::size_t>(&ins - chunk.code.data()));
+  if (unit < 0) throw std::logic_error("ChunkPrinter: a sin-cos kernel missing from the entry block");
+  const auto u = static_cast<std::uint32_t>(unit);
+  auto copy = [&](const std::string& local, std::uint32_t v, char what) {
+    out_ << "  " << local << " = " << entryUnitName(v, what) << ";\n";
+  };
+  if (ins.kind == InstrKind::SinCos) {
+    copy(localName(ins.dst), u, 's');
+    copy(localName(ins.dst2), u, 'c');
+    return true;
+  }
+  const std::string p = "p";
+  copy(p + std::to_string(ins.dst), u, 's');
+  copy(p + std::to_string(ins.dst2), u, 'c');
+  if (ins.kind == InstrKind::SinCosQuad) {
+    copy(p + std::to_string(ins.dst3), u + 1, 's');
+    copy(p + std::to_string(ins.dst4), u + 1, 'c');
+  }
+  return true;
 }
 
 void ChunkPrinter::printCompactBody(const std::string& signature, const Chunk& chunk, const std::string& compact,
@@ -278,6 +316,7 @@ void ChunkPrinter::printInstr(const Instr& ins, const Chunk& chunk) {
         declared_pair_[slot] = 1;
         out_ << "  rd_pair p" << slot << ";\n";
       }
+      if (atEntry(ins, chunk)) break;
       out_ << "  rd_sincos_pair" << kernelSuffix() << "(" << operand(ins.args[0]) << ", &p" << ins.dst << ", &p"
            << ins.dst2 << ");\n";
       break;
@@ -287,6 +326,7 @@ void ChunkPrinter::printInstr(const Instr& ins, const Chunk& chunk) {
         declared_pair_[slot] = 1;
         out_ << "  rd_pair p" << slot << ";\n";
       }
+      if (atEntry(ins, chunk)) break;
       out_ << "  rd_sincos_quad" << kernelSuffix() << "(" << operand(ins.args[0]) << ", " << operand(ins.args[1])
            << ", &p" << ins.dst << ", &p" << ins.dst2 << ", &p" << ins.dst3 << ", &p" << ins.dst4 << ");\n";
       break;
@@ -296,6 +336,7 @@ void ChunkPrinter::printInstr(const Instr& ins, const Chunk& chunk) {
         declared_[slot] = 1;
         out_ << "  " << type() << " t" << slot << ";\n";
       }
+      if (atEntry(ins, chunk)) break;
       out_ << "  " << (vector() ? "rd_sincos(" : cat("rd_sincos1", kernelSuffix(), "(")) << operand(ins.args[0])
            << ", &t" << ins.dst << ", &t" << ins.dst2 << ");\n";
       break;

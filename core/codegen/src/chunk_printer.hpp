@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "compact_addressing.hpp"
+#include "entry_kernels.hpp"
 #include "lowering.hpp"
 #include "output_groups.hpp"
 #include "robodiff/codegen/function_definition.hpp"
@@ -40,6 +41,15 @@ class ChunkPrinter {
   // true: sin and cos by the _in_range kernels, with no range check of their own (the
   // function checks its arguments at entry).
   void inRangeKernels(bool on) { in_range_ = on; }
+
+  // Every sin-cos kernel of the chunk computed at the body's entry (entry_kernels.hpp),
+  // its site taking the results: `kernels` of the chunk printed, `angles` the inputs they
+  // take. Both must outlive print().
+  void kernelsAtEntry(const std::vector<EntryKernel>& kernels,
+                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles) {
+    entry_kernels_ = &kernels;
+    entry_angles_ = &angles;
+  }
 
   // true: the chunk holds all of its function's output stores, which are packed into
   // 32-byte groups where the function is bound by its stores (output_groups.hpp).
@@ -103,12 +113,18 @@ class ChunkPrinter {
   void printZeros(std::uint32_t block, const std::vector<ZeroRun>& runs);
 
   void printInstr(const Instr& ins, const Chunk& chunk);
+  // In a body with kernels at entry, a kernel's site: its results copied to its
+  // locals (true); false elsewhere.
+  bool atEntry(const Instr& ins, const Chunk& chunk);
   // A StoreOutput of a packed group: its value named, and the group stored after its last.
   void printGroupedStore(const Instr& ins, std::uint32_t at);
 
   const FunctionDefinition& f_;
   Flavour flavour_;
   bool in_range_ = false;
+  const std::vector<EntryKernel>* entry_kernels_ = nullptr;
+  const std::vector<std::pair<std::uint32_t, std::uint32_t>>* entry_angles_ = nullptr;
+  std::vector<std::int64_t> entry_unit_;  // per instruction: its kernel's first unit, or -1
   bool pack_groups_ = false;
   OutputGroupPlan groups_;  // of the chunk being printed
   std::ostringstream out_;
