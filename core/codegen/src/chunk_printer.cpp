@@ -86,24 +86,25 @@ std::string ChunkPrinter::printOnce(const std::string& signature, const Chunk& c
   // 1.9-2.1 with. Blocks with structural zeros are cleared anyway (ZeroOutput).
   for (std::uint32_t b : claimed)
     out_ << "  memset(o" << b << ", 0, RD_W * " << f_.outputs[b].size() << " * sizeof(double)); /* claim the lines */\n";
-  entry_unit_.clear();
-  if (entry_kernels_) {
-    entry_unit_.assign(chunk.code.size(), -1);
-    std::int64_t unit = 0;
-    for (const EntryKernel& k : *entry_kernels_) {
-      entry_unit_.at(k.at) = unit;
-      unit += static_cast<std::int64_t>(k.units.size());
-    }
-    const EntryBlock block = entryKernelBlock(*entry_kernels_, *entry_angles_);
-    out_ << block.head;
-    for (const Instr& ins : chunk.code)
-      if (ins.kind == InstrKind::ZeroOutput) printInstr(ins, chunk);
-    out_ << block.kernels;
-  }
+  if (entry_kernels_) printEntryBlock(chunk);
   for (const Instr& ins : chunk.code)
     if (!entry_kernels_ || ins.kind != InstrKind::ZeroOutput) printInstr(ins, chunk);
   out_ << "}\n";
   return out_.str();
+}
+
+void ChunkPrinter::printEntryBlock(const Chunk& chunk) {
+  entry_unit_.assign(chunk.code.size(), -1);
+  std::int64_t unit = 0;
+  for (const EntryKernel& k : *entry_kernels_) {
+    entry_unit_.at(k.at) = unit;
+    unit += static_cast<std::int64_t>(k.units.size());
+  }
+  const EntryBlock block = entryKernelBlock(*entry_kernels_, *entry_angles_);
+  out_ << block.head;
+  for (const Instr& ins : chunk.code)
+    if (ins.kind == InstrKind::ZeroOutput) printInstr(ins, chunk);
+  out_ << block.kernels;
 }
 
 bool ChunkPrinter::atEntry(const Instr& ins, const Chunk& chunk) {

@@ -113,6 +113,9 @@ class ChunkPrinter {
   void printZeros(std::uint32_t block, const std::vector<ZeroRun>& runs);
 
   void printInstr(const Instr& ins, const Chunk& chunk);
+  // The entry block of a body with kernels at entry, the body's zero stores within it
+  // (entry_kernels.hpp), and which kernel each instruction is.
+  void printEntryBlock(const Chunk& chunk);
   // In a body with kernels at entry, a kernel's site: its results copied to its
   // locals (true); false elsewhere.
   bool atEntry(const Instr& ins, const Chunk& chunk);
