@@ -95,18 +95,23 @@ std::string batchEntry(const FunctionDefinition& f, const std::string& prefix, s
   return s.str();
 }
 
-std::string rangeCheckedEntry(const std::string& prefix,
-                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles) {
+std::string beyondRangeMask(const std::string& name,
+                            const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles) {
   auto element = [&](std::size_t k) {
     const auto& [block, index] = angles[std::min(k, angles.size() - 1)];  // an odd count repeats the last
     return "in[" + std::to_string(block) + "][" + std::to_string(index) + "]";
   };
+  std::string s = "  const rd_pair_u " + name + " =";
+  for (std::size_t k = 0; k < angles.size(); k += 2)
+    s += (k == 0 ? "" : " |") + std::string("\n    rd_beyond_pair(") + element(k) + ", " + element(k + 1) + ")";
+  return s + ";\n";
+}
+
+std::string rangeCheckedEntry(const std::string& prefix,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles) {
   std::ostringstream s;
   s << "RD_SCALAR_FN static void " << prefix << "_eval" << kEvalParams << " {\n"
-    << "  const rd_pair_u beyond =";
-  for (std::size_t k = 0; k < angles.size(); k += 2)
-    s << (k == 0 ? "" : " |") << "\n    rd_beyond_pair(" << element(k) << ", " << element(k + 1) << ")";
-  s << ";\n"
+    << beyondRangeMask("beyond", angles)
     << "  if (__builtin_expect((beyond[0] | beyond[1]) != 0, 0)) {\n"
     << "    " << prefix << "_exact(in, out, w);\n"
     << "    return;\n"

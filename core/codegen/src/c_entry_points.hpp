@@ -21,6 +21,11 @@ std::string cString(const std::string& s);
 // has vector types, the rest (or everything) through `prefix`_eval.
 std::string batchEntry(const FunctionDefinition& f, const std::string& prefix, std::uint32_t transfer);
 
+// "const rd_pair_u `name` = rd_beyond_pair(in[b][i], in[b][j]) | ...;": all ones in a
+// lane where one of `angles` (block, index) is beyond the sin-cos kernels' range.
+std::string beyondRangeMask(const std::string& name,
+                            const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles);
+
 // `prefix`_eval of a function whose sin-cos kernels all take inputs: the arguments'
 // range checked once, then `prefix`_in_range (kernels without checks) or, with one
 // beyond the kernels' range, `prefix`_exact (libm for it). `angles`: (block, index).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "c_entry_points.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
 
 namespace robodiff::codegen::detail {
@@ -124,18 +125,6 @@ std::string laneText(const KernelLane& l) {
   return (l.negated ? "-i" : "i") + std::to_string(l.block) + "[" + std::to_string(l.index) + "]";
 }
 
-// The arguments' range check: rd_beyond, all ones in a lane where an angle is beyond.
-void printRangeCheck(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& angles, std::ostream& s) {
-  auto element = [&](std::size_t k) {
-    const auto& [block, index] = angles[std::min(k, angles.size() - 1)];  // an odd count repeats the last
-    return "in[" + std::to_string(block) + "][" + std::to_string(index) + "]";
-  };
-  s << "  const rd_pair_u rd_beyond =";
-  for (std::size_t k = 0; k < angles.size(); k += 2)
-    s << (k == 0 ? "" : " |") << "\n    rd_beyond_pair(" << element(k) << ", " << element(k + 1) << ")";
-  s << ";\n";
-}
-
 }  // namespace
 
 std::string entryUnitName(std::uint32_t unit, char what) { return std::string("rd_") + what + std::to_string(unit); }
@@ -164,7 +153,7 @@ EntryBlock entryKernelBlock(const std::vector<EntryKernel>& kernels,
   std::ostringstream s, cold, hot;
   s << "  /* Every sin-cos kernel here, its arguments' range checked once: libm beyond it\n"
     << "     (docs/code-generation.md, \"Kernels at entry\"). */\n";
-  printRangeCheck(angles, s);
+  s << beyondRangeMask("rd_beyond", angles);
   std::uint32_t u = 0;
   std::string xs;
   for (const EntryKernel& k : kernels) {
