@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "asm_emitter.hpp"
 #include "c_entry_points.hpp"
 #include "c_prologue.hpp"
 #include "chunk_printer.hpp"
@@ -263,6 +264,9 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     f.validate(graph);
     if (!names.insert(f.name).second) throw std::invalid_argument("generateLibrary: two functions named '" + f.name + "'");
   }
+  if (options.assembly && w == 1)
+    if (auto target = detail::hostAsmTarget())
+      if (auto lib = detail::generateAssemblyLibrary(graph, functions, options, *target)) return *lib;
   const std::string head = detail::prologue(options);
   const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
   GeneratedLibrary lib;

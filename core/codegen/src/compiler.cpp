@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 
+#include "compiler_family.hpp"
 #include "gcc_passes.hpp"
 #include "lean_link.hpp"
 #include "robodiff/process/program_path.hpp"
@@ -289,6 +290,14 @@ std::string compilerIdentity(const CompilerOptions& options) {
   if (text.empty())
     throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
   return text.substr(0, text.find('\n'));
+}
+
+bool compilerAssembles(const CompilerOptions& options) {
+  const std::string path = resolveCompiler(options);
+  const std::string text = versionText(path, Clock::now() + std::chrono::seconds(30));
+  if (text.empty())
+    throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
+  return detail::isGnuGcc(text) || detail::isClang(text);
 }
 
 CompileReport compileLibrary(const GeneratedLibrary& library, const fs::path& output, const CompilerOptions& options) {

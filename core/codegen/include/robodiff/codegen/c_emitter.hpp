@@ -20,7 +20,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.4.29";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.5.0";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
@@ -66,6 +66,13 @@ struct CodegenOptions {
   // Single-knot instructions from which arrays and constants are addressed compactly;
   // 0: never.
   std::uint64_t compact_addressing_from = kCompactAddressingFrom;
+  // A library without batched code (batch_width 1) whose every function is small, has no
+  // lane pairs and uses only what the assembly back end prints is written as x86-64
+  // assembly for this host (assembled and linked by the compiler driver, no C compiler
+  // pass: builds in ~15 ms and ~6 MiB against ~100 ms and ~38 MiB). Needs a driver that
+  // assembles AT&T syntax with AVX (gcc, clang: compilerAssembles) and a host with AVX2
+  // and FMA. docs/code-generation.md, "The assembly back end".
+  bool assembly = false;
 };
 
 struct SourceFile {

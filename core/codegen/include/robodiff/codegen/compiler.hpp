@@ -90,4 +90,9 @@ std::vector<std::string> compilerFlags(const CompilerOptions& options);
 // be run.
 std::string compilerIdentity(const CompilerOptions& options);
 
+// Whether the compiler driver assembles and links x86-64 AT&T assembly with AVX (gcc,
+// clang; not tcc): CodegenOptions::assembly needs it. Throws CompileError when the
+// compiler cannot be run.
+bool compilerAssembles(const CompilerOptions& options);
+
 }  // namespace robodiff::codegen

@@ -1,0 +1,37 @@
+// The assembly back end: a library of single-knot functions as one x86-64 assembly
+// file, which the compiler driver only assembles and links (no C compiler pass).
+//
+// Where it applies: x86-64 with AVX2 and FMA, functions of additions, subtractions,
+// products, quotients, square roots, absolute values and sin-cos pairs (the robot
+// functions' value rows), with at most seven input and output blocks. Everything else
+// is C (c_emitter.hpp). Why and what it measured: docs/code-generation.md.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "asm_registers.hpp"
+#include "robodiff/codegen/c_emitter.hpp"
+
+namespace robodiff::codegen::detail {
+
+// Functions of this many operations or more are C. Measured (direct calls): value rows
+// of 463-2,662 operations ran 0-12% faster as assembly (the Panda's, arm7's, the
+// quadruped's RNEA), those of 5,399-8,228 15-30% slower (the quadruped's ABA value, the
+// Panda's RNEA and ABA Jacobians, its Euler step with Jacobians). docs/code-generation.md,
+// "The assembly back end".
+inline constexpr std::uint32_t kAssemblyBelow = 3000;
+
+// The host's target for the assembly, or nullopt where it does not apply (not x86-64,
+// or no AVX2 and FMA).
+std::optional<AsmTarget> hostAsmTarget();
+
+// The library as assembly (one source, library.s), or nullopt when a function needs
+// what only C prints, has lane pairs (which C computes two at a time: a twin-limbed
+// robot's functions ran up to 1.9x faster so) or kAssemblyBelow operations or more.
+// eval_batch loops over eval (batch width 1).
+std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& graph,
+                                                        const std::vector<FunctionDefinition>& functions,
+                                                        const CodegenOptions& options, const AsmTarget& target);
+
+}  // namespace robodiff::codegen::detail

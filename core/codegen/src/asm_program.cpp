@@ -1,0 +1,395 @@
+#include "asm_program.hpp"
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <bit>
+#include <cstdint>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "robodiff/codegen/sincos_kernel.h"
+
+namespace robodiff::codegen::detail {
+namespace {
+
+using symbolic::Op;
+
+constexpr std::uint64_t kSignBit = 0x8000000000000000ull;
+constexpr std::uint64_t kAbsMask = 0x7fffffffffffffffull;
+
+std::uint64_t bitsOf(double x) { return std::bit_cast<std::uint64_t>(x); }
+
+// A lowered operand as a value: the value and whether it is read negated.
+struct Signed {
+  std::uint32_t value = kNoValue;
+  bool negated = false;
+};
+
+class Builder {
+ public:
+  Builder(const Chunk& chunk, const FunctionDefinition& function) : chunk_(chunk), function_(function) {}
+
+  std::optional<AsmProgram> build() {
+    if (!supported()) return std::nullopt;
+    countUses();
+    planEntryKernels();
+    for (std::size_t i = 0; i < chunk_.code.size(); ++i) emitInstr(chunk_.code[i], i);
+    return std::move(program_);
+  }
+
+ private:
+  // Everything but libm calls other than sincos, min, max and selects.
+  bool supported() const {
+    for (const Instr& ins : chunk_.code) {
+      switch (ins.kind) {
+        case InstrKind::LoadInput: case InstrKind::SinCos: case InstrKind::StoreOutput: case InstrKind::ZeroOutput:
+          break;
+        case InstrKind::Compute:
+          switch (ins.op) {
+            case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Neg: case Op::Sqrt: case Op::Abs:
+            case Op::Sin: case Op::Cos:  // the kernel, one of its results unused
+              break;
+            default:
+              return false;
+          }
+          break;
+        default:
+          return false;  // lane pairs and transfers: only C prints them
+      }
+    }
+    return true;
+  }
+
+  // The kernels' lanes at entry, when every sin-cos argument is an input read as it is.
+  void planEntryKernels() {
+    std::unordered_map<std::uint32_t, EntryKernelInput> loaded;  // slot -> input, as last defined
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> arguments;
+    for (const Instr& ins : chunk_.code) {
+      if (isKernel(ins)) {
+        const Operand& x = ins.args[0];
+        auto it = x.kind == Operand::Kind::Slot && !x.negated ? loaded.find(x.slot) : loaded.end();
+        if (it == loaded.end()) return;
+        arguments.emplace_back(it->second.block, it->second.index);
+      }
+      if (ins.kind == InstrKind::LoadInput) loaded[ins.dst] = {ins.block, ins.index};
+      else if (ins.kind == InstrKind::Compute) loaded.erase(ins.dst);
+      else if (ins.kind == InstrKind::SinCos) loaded.erase(ins.dst), loaded.erase(ins.dst2);
+    }
+    std::sort(arguments.begin(), arguments.end());
+    arguments.erase(std::unique(arguments.begin(), arguments.end()), arguments.end());
+    for (std::size_t lane = 0; lane < arguments.size(); ++lane) {
+      program_.entry_kernels.push_back({arguments[lane].first, arguments[lane].second});
+      lane_of_[arguments[lane]] = static_cast<std::uint32_t>(lane);
+    }
+    kernels_at_entry_ = true;
+  }
+
+  static bool isKernel(const Instr& ins) {
+    return ins.kind == InstrKind::SinCos ||
+           (ins.kind == InstrKind::Compute && (ins.op == Op::Sin || ins.op == Op::Cos));
+  }
+
+  // The products read once, by a sum: those are fused into it.
+  void countUses() {
+    std::unordered_map<std::uint32_t, std::size_t> slot_def;  // slot -> defining instruction
+    std::vector<int> uses(chunk_.code.size(), 0);
+    std::vector<std::size_t> def_of_operand;
+    auto definer = [&](const Operand& o) -> std::size_t {
+      if (o.kind != Operand::Kind::Slot) return SIZE_MAX;
+      auto it = slot_def.find(o.slot);
+      return it == slot_def.end() ? SIZE_MAX : it->second;
+    };
+    std::vector<std::array<std::size_t, 3>> readers(chunk_.code.size());
+    for (std::size_t i = 0; i < chunk_.code.size(); ++i) {
+      const Instr& ins = chunk_.code[i];
+      for (int a = 0; a < 3; ++a) {
+        readers[i][a] = definer(ins.args[a]);
+        if (readers[i][a] != SIZE_MAX && reads(ins, a)) ++uses[readers[i][a]];
+      }
+      if (ins.kind == InstrKind::LoadInput || ins.kind == InstrKind::Compute) slot_def[ins.dst] = i;
+      if (ins.kind == InstrKind::SinCos) slot_def[ins.dst] = slot_def[ins.dst2] = SIZE_MAX;
+    }
+    fused_.assign(chunk_.code.size(), false);
+    fused_into_.assign(chunk_.code.size(), -1);
+    for (std::size_t i = 0; i < chunk_.code.size(); ++i) {
+      const Instr& ins = chunk_.code[i];
+      if (ins.kind != InstrKind::Compute || (ins.op != Op::Add && ins.op != Op::Sub)) continue;
+      for (int a = 1; a >= 0; --a) {
+        const std::size_t d = readers[i][a];
+        if (d == SIZE_MAX || uses[d] != 1) continue;
+        const Instr& def = chunk_.code[d];
+        if (def.kind != InstrKind::Compute || def.op != Op::Mul || fused_[d]) continue;
+        fused_[d] = true;
+        fused_into_[i] = a;
+        break;
+      }
+    }
+  }
+
+  static bool reads(const Instr& ins, int a) {
+    switch (ins.kind) {
+      case InstrKind::Compute: return a < symbolic::arity(ins.op);
+      case InstrKind::SinCos: case InstrKind::StoreOutput: return a == 0;
+      default: return false;
+    }
+  }
+
+  std::uint32_t newValue(ValueHome home = {}) {
+    program_.homes.push_back(home);
+    return program_.values() - 1;
+  }
+  std::uint32_t constant(std::uint64_t bits) {
+    ValueHome h;
+    h.kind = ValueHome::Kind::Constant;
+    h.bits = bits;
+    return newValue(h);
+  }
+  std::uint32_t constant(double x) { return constant(bitsOf(x)); }
+
+  std::uint32_t emit(MCode code, std::uint32_t a = kNoValue, std::uint32_t b = kNoValue, std::uint32_t c = kNoValue) {
+    MOp op;
+    op.code = code;
+    op.src[0] = a;
+    op.src[1] = b;
+    op.src[2] = c;
+    op.dst = newValue();
+    program_.ops.push_back(op);
+    return op.dst;
+  }
+  std::uint32_t fma(std::uint32_t a, std::uint32_t b, std::uint32_t c, bool negate_product = false,
+                    bool negate_addend = false) {
+    const std::uint32_t d = emit(MCode::Fma, a, b, c);
+    program_.ops.back().negate_product = negate_product;
+    program_.ops.back().negate_addend = negate_addend;
+    return d;
+  }
+  std::uint32_t negate(std::uint32_t v) { return emit(MCode::Xor, v, constant(kSignBit)); }
+
+  Signed operand(const Operand& o) {
+    switch (o.kind) {
+      case Operand::Kind::Slot: return {slot_value_.at(o.slot), o.negated};
+      case Operand::Kind::Constant: return {constant(o.value), false};
+      case Operand::Kind::Input: {
+        ValueHome h;
+        h.kind = ValueHome::Kind::Input;
+        h.block = o.block;
+        h.index = o.index;
+        return {newValue(h), o.negated};
+      }
+      default: throw std::logic_error("asm_program: a lane operand");
+    }
+  }
+  // The operand's value with its sign applied.
+  std::uint32_t plain(const Operand& o) {
+    const Signed s = operand(o);
+    return s.negated ? negate(s.value) : s.value;
+  }
+
+  void emitInstr(const Instr& ins, std::size_t i) {
+    switch (ins.kind) {
+      case InstrKind::LoadInput: {
+        ValueHome h;
+        h.kind = ValueHome::Kind::Input;
+        h.block = ins.block;
+        h.index = ins.index;
+        slot_value_[ins.dst] = newValue(h);
+        return;
+      }
+      case InstrKind::Compute: return emitCompute(ins, i);
+      case InstrKind::SinCos: {
+        if (kernels_at_entry_) return entryKernelResults(ins);
+        const auto [s, c] = sincos(plain(ins.args[0]));
+        slot_value_[ins.dst] = s;
+        slot_value_[ins.dst2] = c;
+        return;
+      }
+      case InstrKind::StoreOutput: {
+        const std::uint32_t v = storedValue(ins.args[0]);
+        MOp op;
+        op.code = MCode::Store;
+        op.src[0] = v;
+        op.block = ins.block;
+        op.index = ins.index;
+        program_.ops.push_back(op);
+        return;
+      }
+      case InstrKind::ZeroOutput: return emitZeros(ins);
+      default: throw std::logic_error("asm_program: an instruction only C prints");
+    }
+  }
+
+  // sin and cos of an input, computed at entry: values at home in the frame (a lone sin
+  // or cos, ins.op, takes one of them).
+  void entryKernelResults(const Instr& ins) {
+    const ValueHome& x = program_.homes.at(slot_value_.at(ins.args[0].slot));
+    const std::uint32_t lane = lane_of_.at({x.block, x.index});
+    ValueHome h;
+    h.kind = ValueHome::Kind::EntryKernel;
+    h.index = 64 * (lane / 4) + 8 * (lane % 4);
+    if (ins.kind == InstrKind::Compute) {
+      if (ins.op == Op::Cos) h.index += 32;
+      slot_value_[ins.dst] = newValue(h);
+      return;
+    }
+    slot_value_[ins.dst] = newValue(h);
+    h.index += 32;
+    slot_value_[ins.dst2] = newValue(h);
+  }
+
+  std::uint32_t storedValue(const Operand& o) {
+    if (o.kind == Operand::Kind::Constant && bitsOf(o.value) == 0) return emit(MCode::Zero);
+    return plain(o);
+  }
+
+  // A block's zero runs: each group of four from element 4k holding a zero cleared
+  // whole (the block's other stores come after), a shorter tail's zeros one by one.
+  void emitZeros(const Instr& ins) {
+    const std::uint32_t zero = emit(MCode::Zero);
+    auto store = [&](MCode code, std::uint32_t index) {
+      MOp op;
+      op.code = code;
+      op.src[0] = zero;
+      op.block = ins.block;
+      op.index = index;
+      program_.ops.push_back(op);
+    };
+    forEachZeroStore(
+        chunk_.zero_runs[ins.index], function_.outputs[ins.block].size(),
+        [&](std::uint32_t group) { store(MCode::StoreZero4, group); },
+        [&](std::uint32_t k) { store(MCode::StoreZero1, k); });
+  }
+
+  void emitCompute(const Instr& ins, std::size_t i) {
+    if (fused_[i]) {  // computed by its sum
+      products_[ins.dst] = {operand(ins.args[0]), operand(ins.args[1])};
+      slot_value_[ins.dst] = kNoValue;
+      return;
+    }
+    switch (ins.op) {
+      case Op::Add: case Op::Sub: return slot_value_[ins.dst] = sum(ins, i), void();
+      case Op::Mul: case Op::Div: {
+        const Signed a = operand(ins.args[0]), b = operand(ins.args[1]);
+        bool negative = a.negated != b.negated;
+        for (std::uint32_t v : {a.value, b.value})  // the sign into a constant factor (a fresh value)
+          if (negative && program_.homes[v].kind == ValueHome::Kind::Constant) {
+            program_.homes[v].bits ^= kSignBit;
+            negative = false;
+          }
+        const std::uint32_t r = emit(ins.op == Op::Mul ? MCode::Mul : MCode::Div, a.value, b.value);
+        slot_value_[ins.dst] = negative ? negate(r) : r;
+        return;
+      }
+      case Op::Neg: {
+        const Signed a = operand(ins.args[0]);
+        slot_value_[ins.dst] = a.negated ? a.value : negate(a.value);
+        return;
+      }
+      case Op::Sqrt: slot_value_[ins.dst] = emit(MCode::Sqrt, plain(ins.args[0])); return;
+      case Op::Sin: case Op::Cos: {
+        if (kernels_at_entry_) return entryKernelResults(ins);
+        const auto [s, c] = sincos(plain(ins.args[0]));
+        slot_value_[ins.dst] = ins.op == Op::Sin ? s : c;
+        return;
+      }
+      case Op::Abs: slot_value_[ins.dst] = emit(MCode::And, operand(ins.args[0]).value, constant(kAbsMask)); return;
+      default: throw std::logic_error("asm_program: an unsupported operation");
+    }
+  }
+
+  // a + b or a - b, the operands' signs folded in; a product read only here fused.
+  std::uint32_t sum(const Instr& ins, std::size_t i) {
+    Signed t[2] = {operandOrProduct(ins.args[0]), operandOrProduct(ins.args[1])};
+    if (ins.op == Op::Sub) t[1].negated = !t[1].negated;
+    const int p = fused_into_[i];
+    if (p >= 0) {
+      const auto& [a, b] = products_.at(ins.args[p].slot);
+      const Signed& addend = t[1 - p];
+      const bool negative_product = t[p].negated != (a.negated != b.negated);
+      return fma(a.value, b.value, addend.value, negative_product, addend.negated);
+    }
+    if (!t[0].negated && !t[1].negated) return emit(MCode::Add, t[0].value, t[1].value);
+    if (!t[0].negated) return emit(MCode::Sub, t[0].value, t[1].value);
+    if (!t[1].negated) return emit(MCode::Sub, t[1].value, t[0].value);
+    return negate(emit(MCode::Add, t[0].value, t[1].value));
+  }
+  Signed operandOrProduct(const Operand& o) {
+    if (o.kind == Operand::Kind::Slot && slot_value_.at(o.slot) == kNoValue) return {kNoValue, o.negated};
+    return operand(o);
+  }
+
+  // sincos_kernel.h's kernel on x, in a region with its range check; (sin x, cos x).
+  std::pair<std::uint32_t, std::uint32_t> sincos(std::uint32_t x) {
+    MOp begin;
+    begin.code = MCode::KernelBegin;
+    begin.src[0] = x;
+    const std::size_t begin_at = program_.ops.size();
+    program_.ops.push_back(begin);
+    MOp check;
+    check.code = MCode::KernelCheck;
+    check.src[0] = emit(MCode::And, x, constant(kAbsMask));
+    check.src[1] = x;
+    program_.ops.push_back(check);
+    // The reduction: t's low bits hold the quadrant; r = x - k pi/2; z = r^2.
+    const std::uint32_t t = fma(x, constant(RD_SC_TWO_OVER_PI), constant(RD_SC_ROUNDER));
+    const std::uint32_t k = emit(MCode::Sub, t, constant(RD_SC_ROUNDER));
+    const std::uint32_t r1 = fma(k, constant(RD_SC_PIO2_1), x, true);
+    const std::uint32_t r2 = fma(k, constant(RD_SC_PIO2_2), r1, true);
+    const std::uint32_t w = emit(MCode::Mul, emit(MCode::Mul, k, constant(-2.0 * RD_SC_PIO2_3)), r1);
+    const std::uint32_t z = fma(r2, r2, w);
+    const std::uint32_t r = fma(k, constant(RD_SC_PIO2_3), r2, true);
+    // The polynomials' tails by Estrin's scheme.
+    const std::uint32_t z2 = emit(MCode::Mul, z, z), z4 = emit(MCode::Mul, z2, z2);
+    auto pair = [&](double c0, double c1) { return fma(z, constant(c1), constant(c0)); };
+    const std::uint32_t s01 = pair(-1.0 / 6.0, 1.0 / 120.0), s23 = pair(-1.0 / 5040.0, 1.0 / 362880.0);
+    const std::uint32_t s45 = pair(-1.0 / 39916800.0, 1.0 / 6227020800.0);
+    const std::uint32_t s67 = pair(-1.0 / 1307674368000.0, 1.0 / 355687428096000.0);
+    const std::uint32_t st = fma(z4, fma(z2, s67, s45), fma(z2, s23, s01));
+    const std::uint32_t c01 = pair(1.0 / 24.0, -1.0 / 720.0), c23 = pair(1.0 / 40320.0, -1.0 / 3628800.0);
+    const std::uint32_t c45 = pair(1.0 / 479001600.0, -1.0 / 87178291200.0);
+    const std::uint32_t ct = fma(z4, fma(z2, constant(1.0 / 20922789888000.0), c45), fma(z2, c23, c01));
+    // The quadrant's signs before the last operations, then the swap (RD_SC_VECTOR).
+    const std::uint32_t two = constant(std::uint64_t{2});
+    const std::uint32_t sin_r_sign = emit(MCode::And, emit(MCode::AddQ, t, constant(std::uint64_t{1})), two);
+    const std::uint32_t sin_sign = shl62(sin_r_sign);
+    const std::uint32_t cos_sign = shl62(emit(MCode::And, t, two));
+    const std::uint32_t rs = emit(MCode::Xor, r, sin_sign);
+    const std::uint32_t sp = fma(emit(MCode::Mul, rs, z), st, rs);
+    const std::uint32_t half = fma(z, constant(0.5), constant(1.0), true);
+    const std::uint32_t cp = fma(emit(MCode::Xor, z2, cos_sign), ct, emit(MCode::Xor, half, cos_sign));
+    const std::uint32_t odd = emit(MCode::And, t, constant(std::uint64_t{1}));
+    const std::uint32_t swap = emit(MCode::SubQ, emit(MCode::Zero), odd);
+    const std::uint32_t d = emit(MCode::And, emit(MCode::Xor, sp, cp), swap);
+    const std::uint32_t s = emit(MCode::Xor, sp, d), c = emit(MCode::Xor, cp, d);
+    MOp end;
+    end.code = MCode::KernelEnd;
+    end.src[0] = s;
+    end.src[1] = c;
+    end.imm = static_cast<int>(begin_at);
+    program_.ops.push_back(end);
+    return {s, c};
+  }
+  std::uint32_t shl62(std::uint32_t v) {
+    const std::uint32_t d = emit(MCode::ShlQ, v);
+    program_.ops.back().imm = 62;
+    return d;
+  }
+
+  const Chunk& chunk_;
+  const FunctionDefinition& function_;
+  AsmProgram program_;
+  std::vector<bool> fused_;
+  std::vector<int> fused_into_;  // per sum: which operand is its fused product, or -1
+  std::unordered_map<std::uint32_t, std::uint32_t> slot_value_;
+  std::unordered_map<std::uint32_t, std::pair<Signed, Signed>> products_;  // fused product's slot -> factors
+  bool kernels_at_entry_ = false;  // the kernels run at entry
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> lane_of_;  // (block, index) -> lane
+};
+
+}  // namespace
+
+std::optional<AsmProgram> buildAsmProgram(const Chunk& chunk, const FunctionDefinition& function) {
+  return Builder(chunk, function).build();
+}
+
+}  // namespace robodiff::codegen::detail

@@ -1,0 +1,504 @@
+#include "asm_registers.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "asm_entry_kernels.hpp"
+
+namespace robodiff::codegen::detail {
+
+std::string AsmConstants::label(std::uint64_t bits) {
+  auto it = index_.emplace(bits, static_cast<int>(index_.size())).first;
+  return ".LRDc" + std::to_string(it->second);
+}
+
+std::string AsmConstants::vector(std::uint64_t bits) {
+  auto it = vector_index_.emplace(bits, static_cast<int>(vector_index_.size())).first;
+  return ".LRDv" + std::to_string(it->second);
+}
+
+namespace {
+
+// A pool's entries in the order of their labels: `copies` quads of each (then zeros to 16 bytes).
+std::string printPool(const std::map<std::uint64_t, int>& index, const char* prefix, int copies) {
+  if (index.empty()) return {};
+  const int bytes = copies == 4 ? 32 : 16;
+  std::ostringstream s;
+  s << "\t.section\t.rodata.cst" << bytes << ",\"aM\",@progbits," << bytes << "\n\t.p2align " << (bytes == 32 ? 5 : 4)
+    << "\n";
+  std::vector<std::pair<int, std::uint64_t>> ordered;
+  for (const auto& [bits, i] : index) ordered.emplace_back(i, bits);
+  std::sort(ordered.begin(), ordered.end());
+  char quad[32];
+  for (const auto& [i, bits] : ordered) {
+    std::snprintf(quad, sizeof quad, "0x%016llx", static_cast<unsigned long long>(bits));
+    s << prefix << i << ":\n\t.quad\t" << quad;
+    for (int c = 1; c < copies; ++c) s << ", " << quad;
+    s << (copies == 1 ? ", 0\n" : "\n");
+  }
+  return s.str();
+}
+
+}  // namespace
+
+std::string AsmConstants::print() const { return printPool(index_, ".LRDc", 1) + printPool(vector_index_, ".LRDv", 4); }
+
+namespace {
+
+constexpr const char* kBlockRegisters[] = {"%rax", "%rcx", "%rdx", "%r8", "%r9", "%r10", "%r11"};
+constexpr int kBlockRegisterCount = 7;
+constexpr std::uint32_t kNever = 0xffffffffu;
+constexpr int kNoRegister = -1;
+
+// The input and output blocks a program reads or writes, each given a register.
+struct BlockRegisters {
+  std::map<std::uint32_t, int> input, output;
+  int count() const { return static_cast<int>(input.size() + output.size()); }
+};
+
+BlockRegisters blockRegisters(const AsmProgram& p) {
+  BlockRegisters b;
+  for (const ValueHome& h : p.homes)
+    if (h.kind == ValueHome::Kind::Input) b.input.emplace(h.block, 0);
+  for (const MOp& op : p.ops)
+    if (op.code == MCode::Store || op.code == MCode::StoreZero4 || op.code == MCode::StoreZero1)
+      b.output.emplace(op.block, 0);
+  int next = 0;
+  for (auto& [block, r] : b.input) r = next++;
+  for (auto& [block, r] : b.output) r = next++;
+  return b;
+}
+
+// A sin-cos region's way back from libm: registers saved, the call, results loaded.
+struct ColdPath {
+  int label = 0;
+  int x = 0, sin = 0, cos = 0;  // registers
+  std::vector<int> saved;       // xmm registers live across the region
+};
+
+std::string xmm(int r) { return "%xmm" + std::to_string(r); }
+std::string ymm(int r) { return "%ymm" + std::to_string(r); }
+
+class FunctionPrinter {
+ public:
+  FunctionPrinter(const AsmProgram& p, const AsmTarget& target, AsmConstants& constants)
+      : p_(p), evex_(target.xmm_registers > 16), constants_(constants), blocks_(blockRegisters(p)) {
+    if (blocks_.count() > kBlockRegisterCount)
+      throw std::logic_error("asm: more blocks than general-purpose registers");
+    const std::uint32_t n = p.values();
+    uses_.resize(n);
+    for (std::uint32_t i = 0; i < p.ops.size(); ++i)
+      for (std::uint32_t v : p.ops[i].src)
+        if (v != kNoValue && (uses_[v].empty() || uses_[v].back() != i)) uses_[v].push_back(i);
+    cursor_.assign(n, 0);
+    reg_.assign(n, kNoRegister);
+    slot_.assign(n, -1);
+    holds_.assign(target.xmm_registers, kNoValue);
+    locked_.assign(target.xmm_registers, false);
+  }
+
+  std::string print(const std::string& symbol, AsmFunctionStats* stats) {
+    label_ = symbol;
+    kernel_bytes_ = p_.entry_kernels.empty() ? 0 : entryKernelBytes(p_.entry_kernels.size());
+    const std::string kept = keepLastKernelGroup();
+    for (std::uint32_t i = 0; i < p_.ops.size(); ++i) printOp(i);
+    const int frame = frameBytes();
+    std::vector<std::string> block_registers(kBlockRegisters, kBlockRegisters + blocks_.count());
+    const EntryKernelCode kernels = printEntryKernels(
+        symbol, p_.entry_kernels, [&](std::uint32_t b, std::uint32_t i) { return inputMemory(b, i); }, block_registers,
+        EntryKernelFrame{0, gprSave()}, constants_);
+    std::ostringstream s;
+    s << "\t.text\n\t.p2align 4\n\t.type\t" << symbol << ", @function\n" << symbol << ":\n";
+    if (frame > 0) s << "\tsub\t$" << frame << ", %rsp\n";
+    for (const auto& [block, r] : blocks_.input) s << "\tmov\t" << 8 * block << "(%rdi), " << kBlockRegisters[r] << "\n";
+    for (const auto& [block, r] : blocks_.output) s << "\tmov\t" << 8 * block << "(%rsi), " << kBlockRegisters[r] << "\n";
+    s << kernels.hot << kept << body_.str();
+    if (frame > 0) s << "\tadd\t$" << frame << ", %rsp\n";
+    s << "\tret\n";
+    for (const ColdPath& c : cold_) s << coldPath(c);
+    s << kernels.cold;
+    s << "\t.size\t" << symbol << ", .-" << symbol << "\n\n";
+    if (stats) *stats = stats_;
+    return s.str();
+  }
+
+ private:
+  // The last kernel group's results, still in %ymm1 (sines) and %ymm2 (cosines), given
+  // to their values in registers: lane 0 as it is, the others moved out (lanes 2 and 3
+  // before vzeroupper clears the upper halves). The body then need not wait for the
+  // frame's store and load. Returns that code, vzeroupper included.
+  std::string keepLastKernelGroup() {
+    if (p_.entry_kernels.empty()) return {};
+    const std::uint32_t group = static_cast<std::uint32_t>((p_.entry_kernels.size() - 1) / 4);
+    const std::uint32_t lanes = static_cast<std::uint32_t>(p_.entry_kernels.size()) - 4 * group;
+    std::map<std::uint32_t, std::uint32_t> value_at;  // frame offset -> value
+    for (std::uint32_t v = 0; v < p_.values(); ++v)
+      if (p_.homes[v].kind == ValueHome::Kind::EntryKernel && !uses_[v].empty())
+        value_at.emplace(p_.homes[v].index, v);
+    std::ostringstream high, low;
+    int next = 3;
+    for (int result = 0; result < 2; ++result) {
+      const int vector = 1 + result;
+      for (std::uint32_t lane = 0; lane < lanes; ++lane) {
+        auto it = value_at.find(64 * group + 32 * result + 8 * lane);
+        if (it == value_at.end()) continue;
+        int r = vector;
+        if (lane > 0) r = next++;
+        if (lane == 1) low << "\tvpermilpd\t$1, " << xmm(vector) << ", " << xmm(r) << "\n";
+        if (lane >= 2) high << "\tvextractf128\t$1, " << ymm(vector) << ", " << xmm(r) << "\n";
+        if (lane == 3) low << "\tvpermilpd\t$1, " << xmm(r) << ", " << xmm(r) << "\n";
+        bind(it->second, r);
+      }
+    }
+    return high.str() + "\tvzeroupper\n" + low.str();
+  }
+
+  // ---- values and registers ----
+  std::uint32_t nextUse(std::uint32_t v, std::uint32_t after) {
+    auto& u = uses_[v];
+    std::uint32_t& c = cursor_[v];
+    while (c < u.size() && u[c] <= after) ++c;
+    return c < u.size() ? u[c] : kNever;
+  }
+  bool diesAt(std::uint32_t v, std::uint32_t i) const { return !uses_[v].empty() && uses_[v].back() == i; }
+  bool hasMemory(std::uint32_t v) const { return slot_[v] >= 0 || p_.homes[v].kind != ValueHome::Kind::None; }
+  std::string inputMemory(std::uint32_t block, std::uint32_t index) const {
+    return std::to_string(8 * index) + "(" + kBlockRegisters[blocks_.input.at(block)] + ")";
+  }
+  std::string memory(std::uint32_t v) {
+    if (slot_[v] >= 0) return std::to_string(kernel_bytes_ + 8 * slot_[v]) + "(%rsp)";
+    const ValueHome& h = p_.homes[v];
+    if (h.kind == ValueHome::Kind::Input) return inputMemory(h.block, h.index);
+    if (h.kind == ValueHome::Kind::EntryKernel) return std::to_string(h.index) + "(%rsp)";
+    if (h.kind == ValueHome::Kind::Constant) return constants_.label(h.bits) + "(%rip)";
+    throw std::logic_error("asm: a value neither in a register nor in memory");
+  }
+  // The value's register, or its memory operand.
+  std::string where(std::uint32_t v) {
+    if (reg_[v] != kNoRegister) return xmm(reg_[v]);
+    ++stats_.memory_reads;
+    return memory(v);
+  }
+
+  void emit(const std::string& line) {
+    body_ << '\t' << line << '\n';
+    ++stats_.instructions;
+  }
+
+  int freeRegisters() const {
+    int n = 0;
+    for (std::uint32_t h : holds_) n += h == kNoValue;
+    return n;
+  }
+
+  void evict(std::uint32_t after) {
+    int best = kNoRegister;
+    std::uint32_t best_use = 0;
+    bool best_clean = false;
+    for (int r = 0; r < static_cast<int>(holds_.size()); ++r) {
+      if (holds_[r] == kNoValue || locked_[r]) continue;
+      const std::uint32_t use = nextUse(holds_[r], after);
+      const bool clean = hasMemory(holds_[r]);
+      if (best == kNoRegister || use > best_use || (use == best_use && clean && !best_clean)) {
+        best = r;
+        best_use = use;
+        best_clean = clean;
+      }
+    }
+    if (best == kNoRegister) throw std::logic_error("asm: every register is locked");
+    const std::uint32_t v = holds_[best];
+    if (!hasMemory(v)) {
+      slot_[v] = newSlot();
+      emit("vmovsd\t" + xmm(best) + ", " + memory(v));
+      ++stats_.spill_stores;
+    }
+    reg_[v] = kNoRegister;
+    holds_[best] = kNoValue;
+  }
+
+  int takeRegister(std::uint32_t at) {
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int r = 0; r < static_cast<int>(holds_.size()); ++r)
+        if (holds_[r] == kNoValue && !locked_[r]) return r;
+      if (in_region_) throw std::logic_error("asm: a sin-cos region ran out of registers");
+      evict(at);
+    }
+    throw std::logic_error("asm: no register");
+  }
+
+  void bind(std::uint32_t v, int r) {
+    holds_[r] = v;
+    reg_[v] = r;
+  }
+
+  // Puts v in a register (read back from its memory) and locks it for this operation.
+  int inRegister(std::uint32_t v, std::uint32_t at) {
+    if (reg_[v] == kNoRegister) {
+      const std::string from = memory(v);
+      const int r = takeRegister(at);
+      emit("vmovsd\t" + from + ", " + xmm(r));
+      ++stats_.memory_reads;
+      bind(v, r);
+    }
+    locked_[reg_[v]] = true;
+    return reg_[v];
+  }
+
+  int newSlot() {
+    if (!free_slots_.empty()) {
+      const int s = *free_slots_.begin();
+      free_slots_.erase(free_slots_.begin());
+      return s;
+    }
+    return slots_++;
+  }
+
+  void release(std::uint32_t v) {
+    if (reg_[v] != kNoRegister) holds_[reg_[v]] = kNoValue;
+    reg_[v] = kNoRegister;
+    if (slot_[v] >= 0) free_slots_.insert(slot_[v]);
+    slot_[v] = -1;
+  }
+
+  // After operation i: its dying sources released, locks undone, an unread result freed.
+  void finish(const MOp& op, std::uint32_t i) {
+    for (std::uint32_t v : op.src)
+      if (v != kNoValue && diesAt(v, i) && (reg_[v] != kNoRegister || slot_[v] >= 0)) release(v);
+    for (std::uint32_t v : {op.dst, op.dst2})
+      if (v != kNoValue && uses_[v].empty()) release(v);
+    std::fill(locked_.begin(), locked_.end(), false);
+  }
+
+  // A register for the result of operation i, whose sources are read before it is
+  // written: a dying source's register may serve.
+  int resultRegister(const MOp& op, std::uint32_t i) {
+    for (std::uint32_t v : op.src)
+      if (v != kNoValue && diesAt(v, i) && reg_[v] != kNoRegister) {
+        const int r = reg_[v];
+        holds_[r] = kNoValue;
+        reg_[v] = kNoRegister;
+        return r;
+      }
+    return takeRegister(i);
+  }
+
+  // ---- operations ----
+  std::string bitwise(const char* vex, const char* evex) const { return evex_ ? evex : vex; }
+
+  void printOp(std::uint32_t i) {
+    const MOp& op = p_.ops[i];
+    for (std::uint32_t v : op.src)
+      if (v != kNoValue && reg_[v] != kNoRegister) locked_[reg_[v]] = true;
+    switch (op.code) {
+      case MCode::Zero: {
+        const int d = takeRegister(i);
+        const std::string x = bitwise("vpxor", "vpxorq");
+        emit(x + "\t" + xmm(d) + ", " + xmm(d) + ", " + xmm(d));
+        bind(op.dst, d);
+        break;
+      }
+      case MCode::Add: case MCode::Mul: printBinary(op, i, op.code == MCode::Add ? "vaddsd" : "vmulsd", true, false); break;
+      case MCode::Sub: printBinary(op, i, "vsubsd", false, false); break;
+      case MCode::Div: printBinary(op, i, "vdivsd", false, false); break;
+      case MCode::And: printBinary(op, i, bitwise("vpand", "vpandq").c_str(), true, true); break;
+      case MCode::AndNot: printBinary(op, i, bitwise("vpandn", "vpandnq").c_str(), false, true); break;
+      case MCode::Or: printBinary(op, i, bitwise("vpor", "vporq").c_str(), true, true); break;
+      case MCode::Xor: printBinary(op, i, bitwise("vpxor", "vpxorq").c_str(), true, true); break;
+      case MCode::AddQ: printBinary(op, i, "vpaddq", true, true); break;
+      case MCode::SubQ: printBinary(op, i, "vpsubq", false, true); break;
+      case MCode::ShlQ: {
+        const int a = inRegister(op.src[0], i);
+        const int d = resultRegister(op, i);
+        emit("vpsllq\t$" + std::to_string(op.imm) + ", " + xmm(a) + ", " + xmm(d));
+        bind(op.dst, d);
+        break;
+      }
+      case MCode::Sqrt: {
+        const int a = inRegister(op.src[0], i);
+        const int d = resultRegister(op, i);
+        emit("vsqrtsd\t" + xmm(a) + ", " + xmm(a) + ", " + xmm(d));
+        bind(op.dst, d);
+        break;
+      }
+      case MCode::Fma: printFma(op, i); break;
+      case MCode::Store:
+        emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        break;
+      case MCode::StoreZero4:
+        emit("vmovupd\t" + ymm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        break;
+      case MCode::StoreZero1:
+        emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        break;
+      case MCode::KernelBegin: beginRegion(op, i); break;
+      case MCode::KernelCheck: {
+        const int m = inRegister(op.src[0], i);
+        ColdPath c;
+        c.label = static_cast<int>(cold_.size());
+        c.x = inRegister(op.src[1], i);
+        emit("vucomisd\t" + constants_.label(0x4120000000000000ull) + "(%rip), " + xmm(m));
+        emit("ja\t.L" + label_ + "_cold" + std::to_string(c.label));
+        emit("jp\t.L" + label_ + "_cold" + std::to_string(c.label));
+        cold_.push_back(c);
+        break;
+      }
+      case MCode::KernelEnd: {
+        ColdPath& c = cold_.back();
+        c.sin = reg_[op.src[0]];
+        c.cos = reg_[op.src[1]];
+        for (int r = 0; r < static_cast<int>(holds_.size()); ++r)
+          if (holds_[r] != kNoValue && r != c.sin && r != c.cos) c.saved.push_back(r);
+        body_ << ".L" << label_ << "_join" << c.label << ":\n";
+        in_region_ = false;
+        break;
+      }
+    }
+    finish(op, i);
+  }
+
+  std::string output(const MOp& op, std::uint32_t element_offset) const {
+    return std::to_string(8 * (op.index + element_offset)) + "(" + kBlockRegisters[blocks_.output.at(op.block)] + ")";
+  }
+
+  // dst = a op b: a in a register, b where it is (bitwise: a constant's memory only, its
+  // 128 bits); commutative operations take the operand in a register first.
+  void printBinary(const MOp& op, std::uint32_t i, const char* mnemonic, bool commutative, bool bitwise_op) {
+    std::uint32_t a = op.src[0], b = op.src[1];
+    auto memoryOk = [&](std::uint32_t v) {
+      return !bitwise_op || (reg_[v] == kNoRegister && p_.homes[v].kind == ValueHome::Kind::Constant);
+    };
+    if (commutative && reg_[a] == kNoRegister && (reg_[b] != kNoRegister || (bitwise_op && !memoryOk(b))))
+      std::swap(a, b);
+    const int ra = inRegister(a, i);
+    if (!memoryOk(b) || (bitwise_op && reg_[b] != kNoRegister)) inRegister(b, i);
+    const std::string bt = where(b);
+    const int d = resultRegister(op, i);
+    emit(std::string(mnemonic) + "\t" + bt + ", " + xmm(ra) + ", " + xmm(d));
+    bind(op.dst, d);
+  }
+
+  // dst = +-(a * b) +- c in one fused multiply-add, in place where a source dies here.
+  void printFma(const MOp& op, std::uint32_t i) {
+    std::string name = op.negate_product ? (op.negate_addend ? "vfnmsub" : "vfnmadd")
+                                         : (op.negate_addend ? "vfmsub" : "vfmadd");
+    std::uint32_t a = op.src[0], b = op.src[1];
+    const std::uint32_t c = op.src[2];
+    if (reg_[a] == kNoRegister && reg_[b] != kNoRegister) std::swap(a, b);
+    const int ra = inRegister(a, i);
+    const bool once = a != c && b != c;  // c read once: its register may take the result
+    if (reg_[c] != kNoRegister && diesAt(c, i) && once) {
+      const int d = reg_[c];
+      emit(name + "231sd\t" + where(b) + ", " + xmm(ra) + ", " + xmm(d));
+      return moveResult(c, op.dst, d);
+    }
+    if (diesAt(a, i) && a != c) {
+      const int rb = inRegister(b, i);
+      emit(name + "213sd\t" + where(c) + ", " + xmm(rb) + ", " + xmm(ra));
+      return moveResult(a, op.dst, ra);
+    }
+    if (reg_[b] != kNoRegister && diesAt(b, i) && b != c && b != a) {
+      emit(name + "213sd\t" + where(c) + ", " + xmm(ra) + ", " + xmm(reg_[b]));
+      return moveResult(b, op.dst, reg_[b]);
+    }
+    const int d = takeRegister(i);
+    const std::string from = where(c);
+    emit((from[0] == '%' ? "vmovapd\t" : "vmovsd\t") + from + ", " + xmm(d));
+    emit(name + "231sd\t" + where(b) + ", " + xmm(ra) + ", " + xmm(d));
+    bind(op.dst, d);
+  }
+  void moveResult(std::uint32_t dying, std::uint32_t result, int r) {
+    reg_[dying] = kNoRegister;
+    bind(result, r);
+  }
+
+  // Frees the registers the region needs (its most values live at once), so that inside
+  // it nothing is evicted.
+  void beginRegion(const MOp& op, std::uint32_t i) {
+    inRegister(op.src[0], i);
+    std::uint32_t end = i + 1;
+    while (!(p_.ops[end].code == MCode::KernelEnd && p_.ops[end].imm == static_cast<int>(i))) ++end;
+    std::map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> span;  // value -> first, last within
+    for (std::uint32_t j = i + 1; j <= end; ++j) {
+      const MOp& o = p_.ops[j];
+      auto touch = [&](std::uint32_t v) {
+        if (v == kNoValue || v == op.src[0]) return;
+        auto [it, fresh] = span.emplace(v, std::make_pair(j, j));
+        it->second.second = std::min(end, std::max(uses_[v].empty() ? j : uses_[v].back(), j));
+        (void)fresh;
+      };
+      for (std::uint32_t v : o.src) touch(v);
+      touch(o.dst);
+    }
+    int need = 0;
+    for (std::uint32_t j = i + 1; j <= end; ++j) {
+      int live = 0;
+      for (const auto& [v, s] : span) live += s.first <= j && j <= s.second;
+      need = std::max(need, live + 1);
+    }
+    while (freeRegisters() < need) evict(i);
+    in_region_ = true;
+  }
+
+  // The frame: entry kernels' results, spill slots, then the cold paths' save areas.
+  int xmmSave() const { return kernel_bytes_ + 8 * slots_; }
+  int gprSave() const { return xmmSave() + 8 * static_cast<int>(holds_.size()); }
+  int callResults() const { return gprSave() + 8 * kBlockRegisterCount; }
+
+  std::string coldPath(const ColdPath& c) const {
+    const int save = xmmSave(), gpr_save = gprSave(), result = callResults();
+    std::ostringstream s;
+    s << ".L" << label_ << "_cold" << c.label << ":\n";
+    for (int r : c.saved) s << "\tvmovsd\t" << xmm(r) << ", " << save + 8 * r << "(%rsp)\n";
+    for (int g = 0; g < blocks_.count(); ++g) s << "\tmov\t" << kBlockRegisters[g] << ", " << gpr_save + 8 * g << "(%rsp)\n";
+    if (c.x != 0) s << "\tvmovapd\t" << xmm(c.x) << ", %xmm0\n";
+    s << "\tlea\t" << result << "(%rsp), %rdi\n\tlea\t" << result + 8 << "(%rsp), %rsi\n\tcall\tsincos@PLT\n";
+    for (int g = 0; g < blocks_.count(); ++g) s << "\tmov\t" << gpr_save + 8 * g << "(%rsp), " << kBlockRegisters[g] << "\n";
+    for (int r : c.saved) s << "\tvmovsd\t" << save + 8 * r << "(%rsp), " << xmm(r) << "\n";
+    s << "\tvmovsd\t" << result << "(%rsp), " << xmm(c.sin) << "\n\tvmovsd\t" << result + 8 << "(%rsp), " << xmm(c.cos)
+      << "\n\tjmp\t.L" << label_ << "_join" << c.label << "\n";
+    return s.str();
+  }
+
+  // Spill slots, and where there is a cold path its save area; a multiple of 16 plus 8,
+  // so that calls from the cold paths see a 16-byte aligned stack.
+  int frameBytes() const {
+    int bytes = xmmSave();
+    if (!cold_.empty() || kernel_bytes_ > 0) bytes = callResults() + 16;
+    if (bytes == 0) return 0;
+    return (bytes + 8 + 15) / 16 * 16 - 8;
+  }
+
+  const AsmProgram& p_;
+  const bool evex_;
+  AsmConstants& constants_;
+  const BlockRegisters blocks_;
+  std::vector<std::vector<std::uint32_t>> uses_;
+  std::vector<std::uint32_t> cursor_;
+  std::vector<int> reg_, slot_;
+  std::vector<std::uint32_t> holds_;
+  std::vector<bool> locked_;
+  std::set<int> free_slots_;
+  int slots_ = 0;
+  int kernel_bytes_ = 0;  // the entry kernels' results, at the frame's start
+  std::string label_;     // the function's symbol: its labels start with .L<symbol>
+  bool in_region_ = false;
+  std::vector<ColdPath> cold_;
+  std::ostringstream body_;
+  AsmFunctionStats stats_;
+};
+
+}  // namespace
+
+bool asmBlockRegistersSuffice(const AsmProgram& program) { return blockRegisters(program).count() <= kBlockRegisterCount; }
+
+std::string printAsmFunction(const AsmProgram& program, const std::string& symbol, const AsmTarget& target,
+                             AsmConstants& constants, AsmFunctionStats* stats) {
+  return FunctionPrinter(program, target, constants).print(symbol, stats);
+}
+
+}  // namespace robodiff::codegen::detail
