@@ -35,7 +35,8 @@ std::string generatorIdentity(const LibraryOptions& options, const std::string& 
          methodName(b.aba_jacobian) + "; rnea_jacobian=" + methodName(b.rnea_jacobian) +
          "; aba_rnea_partials=" + methodName(b.aba_rnea_partials) + "; aba_value=" + methodName(b.aba_value) +
          "; jacobian_mode=" + symbolic::toString(b.jacobian_mode) + "; split=" + std::to_string(c.split_threshold) +
-         "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width);
+         "; reuse_temporaries=" + (c.reuse_temporaries ? "1" : "0") + "; batch_width=" + std::to_string(c.batch_width) +
+         "; assembly=" + (c.assembly ? "1" : "0");
 }
 
 std::string spaceSeparated(const std::vector<std::string>& words) {

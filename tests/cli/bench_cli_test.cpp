@@ -216,6 +216,11 @@ TEST(BenchCli, NoBatchBuildsTheSingleKnotCodeAlone) {
     std::ifstream description(keep / f / (std::string(f) + ".json"));
     const nlohmann::json d = nlohmann::json::parse(description);
     EXPECT_EQ(d.at("spec").at("build").value("batch", true), false) << f;
+    // Assembly (single-knot code only, docs/code-generation.md) where the host runs it,
+    // else C without its vector variant.
+    if (fs::exists(keep / f / "src" / "library.s")) continue;
+    EXPECT_FALSE(std::string(f) == "rnea_value" && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+        << "a small value function for this CPU is assembled";
     std::ifstream source(keep / f / "src" / "library.c");
     const std::string text((std::istreambuf_iterator<char>(source)), {});
     EXPECT_NE(text.find("#define RD_VECTOR 0"), std::string::npos) << f;

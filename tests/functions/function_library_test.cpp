@@ -56,20 +56,6 @@ using testing::quadruped;
 using testing::robot;
 using testing::TempDir;
 
-// A program found in PATH, or nothing.
-std::optional<fs::path> findInPath(const std::string& program) {
-  const char* path = std::getenv("PATH");
-  if (!path) return std::nullopt;
-  std::string dirs = path;
-  for (std::size_t start = 0; start <= dirs.size();) {
-    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
-    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / program;
-    if (end > start && ::access(candidate.c_str(), X_OK) == 0) return candidate;
-    start = end + 1;
-  }
-  return std::nullopt;
-}
-
 std::vector<Eigen::VectorXd> evaluateCompiled(const Compiled& c, const std::vector<Eigen::VectorXd>& runtime) {
   return evaluateBlocks(*c.function, c.definition(), runtime);
 }
@@ -168,7 +154,7 @@ TEST_P(CompiledGolden, RneaAndAbaJacobiansMatchPinocchio) {
   const int n = model.nv;
   // talos_ff's ABA Jacobian is 225k operations: 20 s with gcc at O0, under 1 s with tcc.
   LibraryOptions options;
-  if (const std::optional<fs::path> tcc = findInPath("tcc"); tcc && model.nv > 20) options.compiler.compiler = *tcc;
+  if (const std::optional<fs::path> tcc = testing::programInPath("tcc"); tcc && model.nv > 20) options.compiler.compiler = *tcc;
   for (const char* name : {"rnea_jacobian", "aba_jacobian"}) {
     SCOPED_TRACE(name);
     const std::unique_ptr<Compiled> c = compile(model, exampleSpec(name), options);

@@ -19,6 +19,9 @@ std::filesystem::path workerPath();  // the built `robodiff-worker` executable
 
 std::string readFile(const std::filesystem::path& path);
 
+// An executable named `program` in PATH, or nothing (optional compilers: tcc, clang).
+std::optional<std::filesystem::path> programInPath(const std::string& program);
+
 }  // namespace robodiff::testing
 
 // Skips the current test with a clear message when ../shared is not there.

@@ -18,6 +18,7 @@ struct GenerateArgs {
   RobotArgs robot;
   std::string spec, out, name, compiler;
   std::optional<std::uint32_t> split_threshold;
+  bool c_only = false;
 };
 
 std::string shape(const BuiltOutput& o) {
@@ -54,6 +55,7 @@ void generate(const GenerateArgs& args) {
   options.builder.name = args.name;
   options.compiler.compiler = args.compiler;
   if (args.split_threshold) options.codegen.split_threshold = *args.split_threshold;
+  if (args.c_only) options.codegen.assembly = false;
   printSummary(spec, generateLibrary(model, spec, args.out, options), std::cout);
 }
 
@@ -67,7 +69,7 @@ void addGenerateCommand(CLI::App& app) {
   addSpecOption(*cmd, args->spec, true);
   cmd->add_option("--out", args->out,
                   "Output directory (created if needed): NAME.so (the library), NAME.json (its description: "
-                  "inputs, outputs, shapes, how it was built) and src/ (the C sources as compiled)")
+                  "inputs, outputs, shapes, how it was built) and src/ (the sources as compiled: C, or assembly)")
       ->required()
       ->type_name("DIR");
   cmd->add_option("--name", args->name,
@@ -81,6 +83,9 @@ void addGenerateCommand(CLI::App& app) {
                   "(default " +
                       std::to_string(LibraryOptions::defaultCodegenOptions().split_threshold) + "; 0: never split)")
       ->type_name("N");
+  cmd->add_flag("--c-only", args->c_only,
+                "Write C where the assembly back end would apply (single-knot builds for this CPU: "
+                "docs/code-generation.md), to read or compare the C");
   cmd->callback([args] { generate(*args); });
 }
 

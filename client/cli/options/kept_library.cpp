@@ -62,7 +62,8 @@ std::optional<GeneratedFunctionLibrary> keptLibrary(const Model& model, const Fu
   const std::optional<nlohmann::json> build = keptBuild(kept.description, spec);
   if (!build || !fs::is_regular_file(kept.library)) return std::nullopt;
   const codegen::GeneratedLibrary sources =
-      codegen::generateLibrary(*kept.built.graph, {kept.built.definition}, codegenOptionsFor(spec.build, options.codegen));
+      codegen::generateLibrary(*kept.built.graph, {kept.built.definition},
+                               codegenOptionsFor(spec.build, options.codegen, compilerOptionsFor(spec.build, options.compiler)));
   for (const codegen::SourceFile& s : sources.sources)
     if (readWhole(dir / "src" / s.path) != s.text) return std::nullopt;
   kept.info = sources.functions.at(0);

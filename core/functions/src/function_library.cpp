@@ -22,6 +22,7 @@ codegen::CodegenOptions LibraryOptions::defaultCodegenOptions() {
   // 0.83-0.87 µs throughout (values cross parts through the work buffer, which stays in
   // L1). Talos RNEA + Jacobian (45k): 3,000 -> 18.6 s under load; 1,000 -> 4.5 s.
   o.split_threshold = 1000;
+  o.assembly = true;  // where codegenOptionsFor and the function allow
   return o;
 }
 
@@ -46,6 +47,15 @@ codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::Co
   const bool this_cpu = build.march_native && build.target.empty();
   if (this_cpu && base.compact_addressing_from == codegen::kCompactAddressingFrom)
     base.compact_addressing_from = codegen::compactAddressingFrom(codegen::hostInstructionCacheBytes());
+  const bool optimized = build.optimization == "O2" || build.optimization == "O3" || build.optimization.empty();
+  if (build.batch || !this_cpu || build.fast_math || !optimized) base.assembly = false;
+  return base;
+}
+
+codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base,
+                                          const codegen::CompilerOptions& compiler) {
+  base = codegenOptionsFor(build, std::move(base));
+  if (base.assembly && !codegen::compilerAssembles(compiler)) base.assembly = false;
   return base;
 }
 
@@ -73,16 +83,16 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   result.built = buildFunction(model, spec, options.builder);
   const std::string& name = result.built.definition.name;
 
+  codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
   const auto t_emit = std::chrono::steady_clock::now();
   const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition},
-                                                                codegenOptionsFor(spec.build, options.codegen));
+                                                                codegenOptionsFor(spec.build, options.codegen, compiler));
   result.emit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_emit).count();
   result.info = sources.functions.at(0);
   for (const codegen::SourceFile& s : sources.sources) result.source_bytes += s.text.size();
 
   stage("compile");
   fs::create_directories(out_dir);
-  codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
   if (compiler.jobs == 0) compiler.jobs = std::max(1u, std::thread::hardware_concurrency());
   compiler.build_dir = out_dir / "src";
   fs::remove_all(compiler.build_dir);  // sources of an earlier build must not linger beside these

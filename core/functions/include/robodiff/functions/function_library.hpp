@@ -37,8 +37,13 @@ struct LibraryOptions {
 
 // The compiler options a spec's build section asks for, on top of `base`.
 codegen::CompilerOptions compilerOptionsFor(const BuildOptions& build, codegen::CompilerOptions base = {});
-// The code generator's options likewise ("batch": false, no SIMD batched code).
+// The code generator's options likewise ("batch": false, no SIMD batched code). The
+// assembly back end stays on only for single-knot builds for this CPU at -O2 or -O3
+// without -ffast-math (the assembly is neither of the other choices).
 codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base);
+// The same for a build by `compiler`: the assembly needs a driver that assembles it.
+codegen::CodegenOptions codegenOptionsFor(const BuildOptions& build, codegen::CodegenOptions base,
+                                          const codegen::CompilerOptions& compiler);
 
 struct GeneratedFunctionLibrary {
   BuiltFunction built;
