@@ -139,11 +139,14 @@ class Builder {
     program_.homes.push_back(home);
     return program_.values() - 1;
   }
+  // One value per constant: the allocator keeps one read often in a register.
   std::uint32_t constant(std::uint64_t bits) {
+    auto [it, fresh] = constants_.emplace(bits, kNoValue);
+    if (!fresh) return it->second;
     ValueHome h;
     h.kind = ValueHome::Kind::Constant;
     h.bits = bits;
-    return newValue(h);
+    return it->second = newValue(h);
   }
   std::uint32_t constant(double x) { return constant(bitsOf(x)); }
 
@@ -205,7 +208,7 @@ class Builder {
         return;
       }
       case InstrKind::StoreOutput: {
-        const std::uint32_t v = storedValue(ins.args[0]);
+        const std::uint32_t v = plain(ins.args[0]);
         MOp op;
         op.code = MCode::Store;
         op.src[0] = v;
@@ -237,15 +240,10 @@ class Builder {
     slot_value_[ins.dst2] = newValue(h);
   }
 
-  std::uint32_t storedValue(const Operand& o) {
-    if (o.kind == Operand::Kind::Constant && bitsOf(o.value) == 0) return emit(MCode::Zero);
-    return plain(o);
-  }
-
   // A block's zero runs: each group of four from element 4k holding a zero cleared
   // whole (the block's other stores come after), a shorter tail's zeros one by one.
   void emitZeros(const Instr& ins) {
-    const std::uint32_t zero = emit(MCode::Zero);
+    const std::uint32_t zero = constant(std::uint64_t{0});  // read by vmovsd: the whole register zero
     auto store = [&](MCode code, std::uint32_t index) {
       MOp op;
       op.code = code;
@@ -269,11 +267,11 @@ class Builder {
     switch (ins.op) {
       case Op::Add: case Op::Sub: return slot_value_[ins.dst] = sum(ins, i), void();
       case Op::Mul: case Op::Div: {
-        const Signed a = operand(ins.args[0]), b = operand(ins.args[1]);
+        Signed a = operand(ins.args[0]), b = operand(ins.args[1]);
         bool negative = a.negated != b.negated;
-        for (std::uint32_t v : {a.value, b.value})  // the sign into a constant factor (a fresh value)
-          if (negative && program_.homes[v].kind == ValueHome::Kind::Constant) {
-            program_.homes[v].bits ^= kSignBit;
+        for (Signed* x : {&a, &b})  // the sign into a constant factor
+          if (negative && program_.homes[x->value].kind == ValueHome::Kind::Constant) {
+            x->value = constant(program_.homes[x->value].bits ^ kSignBit);
             negative = false;
           }
         const std::uint32_t r = emit(ins.op == Op::Mul ? MCode::Mul : MCode::Div, a.value, b.value);
@@ -358,7 +356,7 @@ class Builder {
     const std::uint32_t half = fma(z, constant(0.5), constant(1.0), true);
     const std::uint32_t cp = fma(emit(MCode::Xor, z2, cos_sign), ct, emit(MCode::Xor, half, cos_sign));
     const std::uint32_t odd = emit(MCode::And, t, constant(std::uint64_t{1}));
-    const std::uint32_t swap = emit(MCode::SubQ, emit(MCode::Zero), odd);
+    const std::uint32_t swap = emit(MCode::SubQ, constant(std::uint64_t{0}), odd);
     const std::uint32_t d = emit(MCode::And, emit(MCode::Xor, sp, cp), swap);
     const std::uint32_t s = emit(MCode::Xor, sp, d), c = emit(MCode::Xor, cp, d);
     MOp end;
@@ -383,6 +381,7 @@ class Builder {
   std::unordered_map<std::uint32_t, std::uint32_t> slot_value_;
   std::unordered_map<std::uint32_t, std::pair<Signed, Signed>> products_;  // fused product's slot -> factors
   bool kernels_at_entry_ = false;  // the kernels run at entry
+  std::unordered_map<std::uint64_t, std::uint32_t> constants_;  // bits -> value
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> lane_of_;  // (block, index) -> lane
 };
 

@@ -33,7 +33,6 @@ struct ValueHome {
 };
 
 enum class MCode : std::uint8_t {
-  Zero,       // dst = +0.0 (all bits)
   Add, Sub, Mul, Div,  // dst = a op b (scalar double)
   Sqrt,       // dst = sqrt(a)
   Fma,        // dst = sign_product * (a * b) + sign_addend * c
@@ -41,8 +40,8 @@ enum class MCode : std::uint8_t {
   AddQ, SubQ, // 64-bit integer lanes: dst = a + b, a - b
   ShlQ,       // dst = a << imm (64-bit lanes)
   Store,      // out[block][index] = a
-  StoreZero4, // out[block][index .. index+3] = a (a zero register, all four lanes)
-  StoreZero1, // out[block][index] = a (a zero register)
+  StoreZero4, // out[block][index .. index+3] = a (the constant 0, read whole: all lanes zero)
+  StoreZero1, // out[block][index] = a (the constant 0)
   KernelBegin,  // starts a sin-cos region on x = a (the region's registers are free first)
   KernelCheck,  // a = |x|, b = x: beyond 2^19 or not a number, the cold path (libm's sincos)
   KernelEnd,    // ends it: a = sin x, b = cos x (where the cold path joins); imm: its begin

@@ -196,12 +196,14 @@ class FunctionPrinter {
     return n;
   }
 
-  void evict(std::uint32_t after) {
+  // Frees the register whose value is read again last (a value without memory is
+  // stored to a slot first; `clean_only`: only values with memory, which cost no code).
+  void evict(std::uint32_t after, bool clean_only = false) {
     int best = kNoRegister;
     std::uint32_t best_use = 0;
     bool best_clean = false;
     for (int r = 0; r < static_cast<int>(holds_.size()); ++r) {
-      if (holds_[r] == kNoValue || locked_[r]) continue;
+      if (holds_[r] == kNoValue || locked_[r] || (clean_only && !hasMemory(holds_[r]))) continue;
       const std::uint32_t use = nextUse(holds_[r], after);
       const bool clean = hasMemory(holds_[r]);
       if (best == kNoRegister || use > best_use || (use == best_use && clean && !best_clean)) {
@@ -225,8 +227,7 @@ class FunctionPrinter {
     for (int pass = 0; pass < 2; ++pass) {
       for (int r = 0; r < static_cast<int>(holds_.size()); ++r)
         if (holds_[r] == kNoValue && !locked_[r]) return r;
-      if (in_region_) throw std::logic_error("asm: a sin-cos region ran out of registers");
-      evict(at);
+      evict(at, in_region_);  // a region stores nothing: its cold path would not
     }
     throw std::logic_error("asm: no register");
   }
@@ -295,13 +296,6 @@ class FunctionPrinter {
     for (std::uint32_t v : op.src)
       if (v != kNoValue && reg_[v] != kNoRegister) locked_[reg_[v]] = true;
     switch (op.code) {
-      case MCode::Zero: {
-        const int d = takeRegister(i);
-        const std::string x = bitwise("vpxor", "vpxorq");
-        emit(x + "\t" + xmm(d) + ", " + xmm(d) + ", " + xmm(d));
-        bind(op.dst, d);
-        break;
-      }
       case MCode::Add: case MCode::Mul: printBinary(op, i, op.code == MCode::Add ? "vaddsd" : "vmulsd", true, false); break;
       case MCode::Sub: printBinary(op, i, "vsubsd", false, false); break;
       case MCode::Div: printBinary(op, i, "vdivsd", false, false); break;
@@ -351,6 +345,15 @@ class FunctionPrinter {
         ColdPath& c = cold_.back();
         c.sin = reg_[op.src[0]];
         c.cos = reg_[op.src[1]];
+        // A value the region read into a register (a constant) leaves it: the cold path
+        // did not read it.
+        for (int r = 0; r < static_cast<int>(holds_.size()); ++r) {
+          const std::uint32_t v = holds_[r];
+          if (v == kNoValue || v == op.src[0] || v == op.src[1] || region_start_[r] == v) continue;
+          if (!hasMemory(v)) throw std::logic_error("asm: a value computed in a sin-cos region outlives it");
+          holds_[r] = kNoValue;
+          reg_[v] = kNoRegister;
+        }
         for (int r = 0; r < static_cast<int>(holds_.size()); ++r)
           if (holds_[r] != kNoValue && r != c.sin && r != c.cos) c.saved.push_back(r);
         body_ << ".L" << label_ << "_join" << c.label << ":\n";
@@ -416,8 +419,9 @@ class FunctionPrinter {
     bind(result, r);
   }
 
-  // Frees the registers the region needs (its most values live at once), so that inside
-  // it nothing is evicted.
+  // Frees the registers the region needs (its most computed values live at once, and
+  // three operands read into registers), so that inside it only values with memory are
+  // evicted (no code: the cold path leaves the registers as the hot path does).
   void beginRegion(const MOp& op, std::uint32_t i) {
     inRegister(op.src[0], i);
     std::uint32_t end = i + 1;
@@ -426,7 +430,7 @@ class FunctionPrinter {
     for (std::uint32_t j = i + 1; j <= end; ++j) {
       const MOp& o = p_.ops[j];
       auto touch = [&](std::uint32_t v) {
-        if (v == kNoValue || v == op.src[0]) return;
+        if (v == kNoValue || v == op.src[0] || p_.homes[v].kind != ValueHome::Kind::None) return;
         auto [it, fresh] = span.emplace(v, std::make_pair(j, j));
         it->second.second = std::min(end, std::max(uses_[v].empty() ? j : uses_[v].back(), j));
         (void)fresh;
@@ -438,9 +442,10 @@ class FunctionPrinter {
     for (std::uint32_t j = i + 1; j <= end; ++j) {
       int live = 0;
       for (const auto& [v, s] : span) live += s.first <= j && j <= s.second;
-      need = std::max(need, live + 1);
+      need = std::max(need, live + 3);
     }
     while (freeRegisters() < need) evict(i);
+    region_start_ = holds_;
     in_region_ = true;
   }
 
@@ -481,6 +486,7 @@ class FunctionPrinter {
   std::vector<std::uint32_t> cursor_;
   std::vector<int> reg_, slot_;
   std::vector<std::uint32_t> holds_;
+  std::vector<std::uint32_t> region_start_;  // holds_ as the current sin-cos region began
   std::vector<bool> locked_;
   std::set<int> free_slots_;
   int slots_ = 0;
