@@ -170,6 +170,34 @@ TEST(AsmBackend, SparseBandedAndTriangularOutputsAreWrittenWhole) {
   }
 }
 
+// A frame-Jacobian-like block: few operations, many stores, values scattered among
+// zeros (groups of one to four values, runs of zeros between them).
+FunctionDefinition storeBound(Graph& g) {
+  std::vector<NodeId> values;
+  for (std::uint32_t e = 0; e < 90; ++e) {
+    const std::uint32_t pattern = (e * 7) % 11;
+    if (pattern < 4) values.push_back(g.binary(Op::Mul, g.input(e % 6), g.constant(1.0 + e)));
+    else if (pattern == 4) values.push_back(g.unary(Op::Neg, g.input(e % 6)));
+    else values.push_back(g.zero());
+  }
+  return FunctionDefinition{"scattered", {{"x", 6}}, {OutputBlock::dense("J", 6, 15, values)}};
+}
+
+TEST(AsmBackend, StoreBoundOutputsAreWrittenFourAtATime) {
+  SKIP_WITHOUT_ASSEMBLY();
+  for (const detail::AsmTarget& target : hostTargets()) {
+    Graph g;
+    const FunctionDefinition f = storeBound(g);
+    const GeneratedLibrary lib = assembly(g, {f}, target);
+    const std::string& text = lib.sources[0].text;
+    EXPECT_NE(text.find("vunpcklpd"), std::string::npos) << "two values in one register";
+    EXPECT_NE(text.find("vmovq"), std::string::npos) << "a value and zeros";
+    EXPECT_NE(text.find(target.xmm_registers > 16 ? "vinsertf32x4" : "vinsertf128"), std::string::npos);
+    EXPECT_NE(text.find("vzeroupper\n\tret"), std::string::npos) << "256-bit registers written";
+    expectCompiledAsTheGraph(g, f, lib, 1e-15);  // outputs start NaN: an unwritten element fails
+  }
+}
+
 TEST(AsmBackend, KernelsOfComputedArgumentsRunInTheBody) {
   SKIP_WITHOUT_ASSEMBLY();
   for (const detail::AsmTarget& target : hostTargets()) {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "output_groups.hpp"
 #include "robodiff/codegen/sincos_kernel.h"
 
 namespace robodiff::codegen::detail {
@@ -34,7 +35,10 @@ class Builder {
     if (!supported()) return std::nullopt;
     countUses();
     planEntryKernels();
+    groups_ = planOutputGroups(function_, chunk_, 0xffffffffu);  // zeros are always stored, never a memset
+    group_values_.assign(groups_.groups.size() * 4, kNoValue);
     for (std::size_t i = 0; i < chunk_.code.size(); ++i) emitInstr(chunk_.code[i], i);
+    program_.wide.resize(program_.values(), false);
     return std::move(program_);
   }
 
@@ -94,7 +98,6 @@ class Builder {
   void countUses() {
     std::unordered_map<std::uint32_t, std::size_t> slot_def;  // slot -> defining instruction
     std::vector<int> uses(chunk_.code.size(), 0);
-    std::vector<std::size_t> def_of_operand;
     auto definer = [&](const Operand& o) -> std::size_t {
       if (o.kind != Operand::Kind::Slot) return SIZE_MAX;
       auto it = slot_def.find(o.slot);
@@ -209,6 +212,7 @@ class Builder {
       }
       case InstrKind::StoreOutput: {
         const std::uint32_t v = plain(ins.args[0]);
+        if (groups_.group_of[i] != kNoGroup) return storeInGroup(groups_.group_of[i], ins.index, v, i);
         MOp op;
         op.code = MCode::Store;
         op.src[0] = v;
@@ -240,21 +244,53 @@ class Builder {
     slot_value_[ins.dst2] = newValue(h);
   }
 
+  // An element of an output group; at the group's last store, the group's four
+  // elements (zeros as the constant 0) in one 256-bit store.
+  void storeInGroup(std::uint32_t group, std::uint32_t index, std::uint32_t value, std::size_t at) {
+    const OutputGroup& g = groups_.groups[group];
+    group_values_[4 * group + (index - g.start)] = value;
+    if (g.last != at) return;
+    const std::uint32_t* e = &group_values_[4 * group];
+    const std::uint32_t low = half(e[0], e[1]), high = half(e[2], e[3]);
+    MOp store;
+    store.code = MCode::Store4;
+    store.src[0] = high == zero() ? low : wideValue(MCode::Pack4, low, high);
+    store.block = g.block;
+    store.index = g.start;
+    program_.ops.push_back(store);
+  }
+  // Two elements in 128 bits, the upper half of the 256 zero.
+  std::uint32_t half(std::uint32_t a, std::uint32_t b) {
+    if (a == kNoValue && b == kNoValue) return zero();
+    if (b == kNoValue) return wideValue(MCode::Low, a);
+    return wideValue(MCode::Pack2, a == kNoValue ? zero() : a, b);
+  }
+  std::uint32_t wideValue(MCode code, std::uint32_t a, std::uint32_t b = kNoValue) {
+    const std::uint32_t v = emit(code, a, b);
+    program_.wide.resize(program_.values(), false);
+    program_.wide[v] = true;
+    return v;
+  }
+  // The constant 0, read by vmovsd: the whole register zero.
+  std::uint32_t zero() { return constant(std::uint64_t{0}); }
+
   // A block's zero runs: each group of four from element 4k holding a zero cleared
-  // whole (the block's other stores come after), a shorter tail's zeros one by one.
+  // whole (the block's other stores come after), a shorter tail's zeros one by one;
+  // output groups hold their own zeros.
   void emitZeros(const Instr& ins) {
-    const std::uint32_t zero = constant(std::uint64_t{0});  // read by vmovsd: the whole register zero
     auto store = [&](MCode code, std::uint32_t index) {
       MOp op;
       op.code = code;
-      op.src[0] = zero;
+      op.src[0] = zero();
       op.block = ins.block;
       op.index = index;
       program_.ops.push_back(op);
     };
     forEachZeroStore(
         chunk_.zero_runs[ins.index], function_.outputs[ins.block].size(),
-        [&](std::uint32_t group) { store(MCode::StoreZero4, group); },
+        [&](std::uint32_t group) {
+          if (!groups_.packs(ins.block, group)) store(MCode::StoreZero4, group);
+        },
         [&](std::uint32_t k) { store(MCode::StoreZero1, k); });
   }
 
@@ -356,7 +392,7 @@ class Builder {
     const std::uint32_t half = fma(z, constant(0.5), constant(1.0), true);
     const std::uint32_t cp = fma(emit(MCode::Xor, z2, cos_sign), ct, emit(MCode::Xor, half, cos_sign));
     const std::uint32_t odd = emit(MCode::And, t, constant(std::uint64_t{1}));
-    const std::uint32_t swap = emit(MCode::SubQ, constant(std::uint64_t{0}), odd);
+    const std::uint32_t swap = emit(MCode::SubQ, zero(), odd);
     const std::uint32_t d = emit(MCode::And, emit(MCode::Xor, sp, cp), swap);
     const std::uint32_t s = emit(MCode::Xor, sp, d), c = emit(MCode::Xor, cp, d);
     MOp end;
@@ -382,6 +418,8 @@ class Builder {
   std::unordered_map<std::uint32_t, std::pair<Signed, Signed>> products_;  // fused product's slot -> factors
   bool kernels_at_entry_ = false;  // the kernels run at entry
   std::unordered_map<std::uint64_t, std::uint32_t> constants_;  // bits -> value
+  OutputGroupPlan groups_;
+  std::vector<std::uint32_t> group_values_;  // per group, its four elements' values (kNoValue: zero)
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> lane_of_;  // (block, index) -> lane
 };
 

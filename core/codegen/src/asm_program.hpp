@@ -9,6 +9,8 @@
 //    with the sign bit where no form takes the sign;
 //  - constants and inputs are values with a home in memory: they are never spilled and
 //    may be read straight from memory by the operand that takes memory;
+//  - where stores bound the function, four output elements are stored at once
+//    (output_groups.hpp, as the C does), zeros and values packed in a 256-bit register;
 //  - sin and cos of one argument are the kernel of sincos_kernel.h: at the entry in
 //    vector lanes where every argument is an input (EntryKernelInput), else operation
 //    by operation in a region: checked |x| <= 2^19 first, libm's sincos out of line
@@ -39,6 +41,10 @@ enum class MCode : std::uint8_t {
   And, AndNot, Or, Xor,  // 128-bit bitwise: dst = a & b, ~a & b, a | b, a ^ b
   AddQ, SubQ, // 64-bit integer lanes: dst = a + b, a - b
   ShlQ,       // dst = a << imm (64-bit lanes)
+  Pack2,      // dst = [a, b] (128 bits; a zero upper half)
+  Low,        // dst = [a, 0] (128 bits; a zero upper half)
+  Pack4,      // dst = [a's 128 bits, b's 128 bits] (256 bits)
+  Store4,     // out[block][index .. index+3] = a's 256 bits
   Store,      // out[block][index] = a
   StoreZero4, // out[block][index .. index+3] = a (the constant 0, read whole: all lanes zero)
   StoreZero1, // out[block][index] = a (the constant 0)
@@ -65,6 +71,7 @@ struct EntryKernelInput {
 
 struct AsmProgram {
   std::vector<MOp> ops;
+  std::vector<bool> wide;  // per value: more than its low 64 bits matter (Pack2, Low, Pack4): never spilled
   std::vector<EntryKernelInput> entry_kernels;  // the lanes in order; empty: kernels in the body
   std::vector<ValueHome> homes;  // one per value
   std::uint32_t values() const { return static_cast<std::uint32_t>(homes.size()); }

@@ -102,7 +102,7 @@ class FunctionPrinter {
     locked_.assign(target.xmm_registers, false);
   }
 
-  std::string print(const std::string& symbol, AsmFunctionStats* stats) {
+  std::string print(const std::string& symbol) {
     label_ = symbol;
     kernel_bytes_ = p_.entry_kernels.empty() ? 0 : entryKernelBytes(p_.entry_kernels.size());
     const std::string kept = keepLastKernelGroup();
@@ -119,11 +119,11 @@ class FunctionPrinter {
     for (const auto& [block, r] : blocks_.output) s << "\tmov\t" << 8 * block << "(%rsi), " << kBlockRegisters[r] << "\n";
     s << kernels.hot << kept << body_.str();
     if (frame > 0) s << "\tadd\t$" << frame << ", %rsp\n";
+    if (upper_dirty_) s << "\tvzeroupper\n";  // no penalty for the caller's SSE code
     s << "\tret\n";
     for (const ColdPath& c : cold_) s << coldPath(c);
     s << kernels.cold;
     s << "\t.size\t" << symbol << ", .-" << symbol << "\n\n";
-    if (stats) *stats = stats_;
     return s.str();
   }
 
@@ -181,13 +181,11 @@ class FunctionPrinter {
   // The value's register, or its memory operand.
   std::string where(std::uint32_t v) {
     if (reg_[v] != kNoRegister) return xmm(reg_[v]);
-    ++stats_.memory_reads;
     return memory(v);
   }
 
   void emit(const std::string& line) {
     body_ << '\t' << line << '\n';
-    ++stats_.instructions;
   }
 
   int freeRegisters() const {
@@ -203,7 +201,8 @@ class FunctionPrinter {
     std::uint32_t best_use = 0;
     bool best_clean = false;
     for (int r = 0; r < static_cast<int>(holds_.size()); ++r) {
-      if (holds_[r] == kNoValue || locked_[r] || (clean_only && !hasMemory(holds_[r]))) continue;
+      if (holds_[r] == kNoValue || locked_[r] || p_.wide[holds_[r]] || (clean_only && !hasMemory(holds_[r])))
+        continue;
       const std::uint32_t use = nextUse(holds_[r], after);
       const bool clean = hasMemory(holds_[r]);
       if (best == kNoRegister || use > best_use || (use == best_use && clean && !best_clean)) {
@@ -217,7 +216,6 @@ class FunctionPrinter {
     if (!hasMemory(v)) {
       slot_[v] = newSlot();
       emit("vmovsd\t" + xmm(best) + ", " + memory(v));
-      ++stats_.spill_stores;
     }
     reg_[v] = kNoRegister;
     holds_[best] = kNoValue;
@@ -243,8 +241,7 @@ class FunctionPrinter {
       const std::string from = memory(v);
       const int r = takeRegister(at);
       emit("vmovsd\t" + from + ", " + xmm(r));
-      ++stats_.memory_reads;
-      bind(v, r);
+        bind(v, r);
     }
     locked_[reg_[v]] = true;
     return reg_[v];
@@ -320,6 +317,10 @@ class FunctionPrinter {
         break;
       }
       case MCode::Fma: printFma(op, i); break;
+      case MCode::Pack2: case MCode::Low: case MCode::Pack4: printPack(op, i); break;
+      case MCode::Store4:
+        emit("vmovupd\t" + ymm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        break;
       case MCode::Store:
         emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op, 0));
         break;
@@ -382,6 +383,21 @@ class FunctionPrinter {
     const std::string bt = where(b);
     const int d = resultRegister(op, i);
     emit(std::string(mnemonic) + "\t" + bt + ", " + xmm(ra) + ", " + xmm(d));
+    bind(op.dst, d);
+  }
+
+  // An output group's elements into one register: two doubles (the upper half zero),
+  // or two such halves into 256 bits (EVEX's form where a register is beyond 15).
+  void printPack(const MOp& op, std::uint32_t i) {
+    const int a = inRegister(op.src[0], i);
+    const int b = op.code == MCode::Low ? kNoRegister : inRegister(op.src[1], i);
+    const int d = resultRegister(op, i);
+    if (op.code == MCode::Pack2) emit("vunpcklpd\t" + xmm(b) + ", " + xmm(a) + ", " + xmm(d));
+    if (op.code == MCode::Low) emit("vmovq\t" + xmm(a) + ", " + xmm(d));
+    if (op.code == MCode::Pack4) {
+      emit(bitwise("vinsertf128", "vinsertf32x4") + "\t$1, " + xmm(b) + ", " + ymm(a) + ", " + ymm(d));
+      upper_dirty_ = true;
+    }
     bind(op.dst, d);
   }
 
@@ -457,7 +473,7 @@ class FunctionPrinter {
   std::string coldPath(const ColdPath& c) const {
     const int save = xmmSave(), gpr_save = gprSave(), result = callResults();
     std::ostringstream s;
-    s << ".L" << label_ << "_cold" << c.label << ":\n";
+    s << ".L" << label_ << "_cold" << c.label << ":\n\tvzeroupper\n";
     for (int r : c.saved) s << "\tvmovsd\t" << xmm(r) << ", " << save + 8 * r << "(%rsp)\n";
     for (int g = 0; g < blocks_.count(); ++g) s << "\tmov\t" << kBlockRegisters[g] << ", " << gpr_save + 8 * g << "(%rsp)\n";
     if (c.x != 0) s << "\tvmovapd\t" << xmm(c.x) << ", %xmm0\n";
@@ -491,11 +507,11 @@ class FunctionPrinter {
   std::set<int> free_slots_;
   int slots_ = 0;
   int kernel_bytes_ = 0;  // the entry kernels' results, at the frame's start
+  bool upper_dirty_ = false;  // a 256-bit register written (vzeroupper before returning)
   std::string label_;     // the function's symbol: its labels start with .L<symbol>
   bool in_region_ = false;
   std::vector<ColdPath> cold_;
   std::ostringstream body_;
-  AsmFunctionStats stats_;
 };
 
 }  // namespace
@@ -503,8 +519,8 @@ class FunctionPrinter {
 bool asmBlockRegistersSuffice(const AsmProgram& program) { return blockRegisters(program).count() <= kBlockRegisterCount; }
 
 std::string printAsmFunction(const AsmProgram& program, const std::string& symbol, const AsmTarget& target,
-                             AsmConstants& constants, AsmFunctionStats* stats) {
-  return FunctionPrinter(program, target, constants).print(symbol, stats);
+                             AsmConstants& constants) {
+  return FunctionPrinter(program, target, constants).print(symbol);
 }
 
 }  // namespace robodiff::codegen::detail

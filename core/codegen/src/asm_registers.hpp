@@ -40,17 +40,11 @@ class AsmConstants {
   std::map<std::uint64_t, int> index_, vector_index_;
 };
 
-struct AsmFunctionStats {
-  std::uint32_t instructions = 0;  // in the hot path
-  std::uint32_t spill_stores = 0;
-  std::uint32_t memory_reads = 0;  // reloads and memory operands of stack slots
-};
-
 // The function `symbol` (local to the library) computing `program`. Throws
 // std::logic_error when the program needs more general-purpose registers for its blocks'
 // pointers than the back end has (the caller checks asmBlockRegistersSuffice first).
 std::string printAsmFunction(const AsmProgram& program, const std::string& symbol, const AsmTarget& target,
-                             AsmConstants& constants, AsmFunctionStats* stats = nullptr);
+                             AsmConstants& constants);
 
 // Whether the program's input and output blocks fit the general-purpose registers.
 bool asmBlockRegistersSuffice(const AsmProgram& program);
