@@ -292,32 +292,6 @@ TEST(AsmBackend, TheLibraryDescribesItsFunctionsAndItsBatchLoopEvaluatesEachKnot
   }
 }
 
-// Two limbs mirroring each other, as lane_pairs_test.cpp's: C computes them in lane
-// pairs, so they stay C.
-FunctionDefinition mirroredLimbs(Graph& g) {
-  constexpr std::uint32_t links = 12, inputs = 2 + 2 * links;
-  std::vector<NodeId> values;
-  for (std::uint32_t limb = 0; limb < 2; ++limb) {
-    const std::uint32_t first = limb * inputs;
-    NodeId c = g.input(first), s = g.input(first + 1), e = g.constant(0.5);
-    for (std::uint32_t i = 0; i < links; ++i) {
-      const NodeId x = g.input(first + 2 + 2 * i), y = g.input(first + 3 + 2 * i);
-      const NodeId c2 = g.binary(Op::Sub, g.binary(Op::Mul, c, x), g.binary(Op::Mul, s, y));
-      const NodeId s2 = g.binary(Op::Add, g.binary(Op::Mul, s, x), g.binary(Op::Mul, c, y));
-      e = g.binary(Op::Add, e, g.binary(Op::Div, c2, g.binary(Op::Add, g.one(), g.binary(Op::Mul, s2, s2))));
-      c = c2;
-      s = s2;
-      values.push_back(e);
-    }
-  }
-  std::vector<NodeId> interleaved;
-  for (std::uint32_t i = 0; i < links; ++i) {
-    interleaved.push_back(values[i]);
-    interleaved.push_back(values[links + i]);
-  }
-  return FunctionDefinition{"mirrored", {{"x", 2 * inputs}}, {OutputBlock::dense("e", 2 * links, 1, interleaved)}};
-}
-
 TEST(AsmBackend, WhatTheAssemblyDoesNotPrintStaysC) {
   SKIP_WITHOUT_ASSEMBLY();
   const detail::AsmTarget target = hostTargets().front();
@@ -326,7 +300,7 @@ TEST(AsmBackend, WhatTheAssemblyDoesNotPrintStaysC) {
   const FunctionDefinition with_libm = randomFunction(g, "libm", 5, 60);  // exp, atan2, ... as calls
   ASSERT_TRUE(opsUsed(g, with_libm)[static_cast<int>(Op::Exp)] || opsUsed(g, with_libm)[static_cast<int>(Op::Atan2)]);
   EXPECT_FALSE(detail::generateAssemblyLibrary(g, {signs, with_libm}, withoutPairs(), target)) << "a libm call";
-  const FunctionDefinition mirrored = mirroredLimbs(g);
+  const FunctionDefinition mirrored = twoLimbsFunction(g);  // C computes its twins in lane pairs
   EXPECT_FALSE(detail::generateAssemblyLibrary(g, {mirrored}, {}, target)) << "lane pairs";
   EXPECT_TRUE(detail::generateAssemblyLibrary(g, {mirrored}, withoutPairs(), target));
   EXPECT_FALSE(detail::generateAssemblyLibrary(g, {manyLiveValues(g, detail::kAssemblyBelow)}, withoutPairs(), target))

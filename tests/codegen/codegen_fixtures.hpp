@@ -37,6 +37,20 @@ FunctionDefinition triangularFunction(Graph& g, const std::string& name, int n);
 // and scattered entries), one of them -0.0.
 FunctionDefinition bandedFunction(Graph& g, const std::string& name, int n);
 
+// Links of each limb of twoLimbsFunction.
+inline constexpr std::uint32_t kLimbLinks = 12;
+
+// One limb: a recursion over its links, each reading the previous link's two values and
+// two inputs, as a forward kinematics pass does: c' = c x_i - s y_i, s' = s x_i + c y_i,
+// e = e + c' / (1 + s' s'). A `skewed` limb starts from c = c0 c0: one operation more,
+// everything after it one level deeper than in its twin.
+std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input, bool skewed = false);
+
+// Two limbs, their values interleaved in one block: [e_0 left, e_0 right, e_1 left, ...],
+// in one column, or (cols 2) the left limb's in column 0 and the right limb's in column 1.
+// Every operation has its twin: C computes them in lane pairs.
+FunctionDefinition twoLimbsFunction(Graph& g, std::uint32_t cols = 1);
+
 // The ops reachable from a definition's outputs.
 std::vector<bool> opsUsed(const Graph& g, const FunctionDefinition& f);
 

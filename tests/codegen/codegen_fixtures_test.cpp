@@ -196,6 +196,33 @@ FunctionDefinition bandedFunction(Graph& g, const std::string& name, int n) {
   return f;
 }
 
+std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input, bool skewed) {
+  NodeId c = g.input(first_input), s = g.input(first_input + 1), e = g.constant(0.5);
+  if (skewed) c = g.binary(Op::Mul, c, c);
+  std::vector<NodeId> out;
+  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
+    const NodeId x = g.input(first_input + 2 + 2 * i), y = g.input(first_input + 3 + 2 * i);
+    const NodeId c2 = g.binary(Op::Sub, g.binary(Op::Mul, c, x), g.binary(Op::Mul, s, y));
+    const NodeId s2 = g.binary(Op::Add, g.binary(Op::Mul, s, x), g.binary(Op::Mul, c, y));
+    e = g.binary(Op::Add, e, g.binary(Op::Div, c2, g.binary(Op::Add, g.one(), g.binary(Op::Mul, s2, s2))));
+    c = c2;
+    s = s2;
+    out.push_back(e);
+  }
+  return out;
+}
+
+FunctionDefinition twoLimbsFunction(Graph& g, std::uint32_t cols) {
+  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
+  const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
+  std::vector<NodeId> values;
+  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
+    values.push_back(left[i]);
+    values.push_back(right[i]);
+  }
+  return FunctionDefinition{"limbs", {{"x", 2 * inputs}}, {OutputBlock::dense("e", 2 * kLimbLinks / cols, cols, values)}};
+}
+
 std::vector<bool> opsUsed(const Graph& g, const FunctionDefinition& f) {
   std::vector<char> needed(g.size(), 0);
   for (const auto& b : f.outputs)

@@ -24,42 +24,6 @@ namespace {
 using namespace testing;
 using robodiff::testing::TempDir;
 
-constexpr std::uint32_t kLimbLinks = 12;
-
-// One limb: a recursion over its links, each reading the previous link's two values and
-// two inputs, as a forward kinematics pass does: c' = c x_i - s y_i, s' = s x_i + c y_i,
-// e = e + c' / (1 + s' s'). A `skewed` limb starts from c = c0 c0: one operation more,
-// everything after it one level deeper than in its twin.
-std::vector<NodeId> limbValues(Graph& g, std::uint32_t first_input, bool skewed = false) {
-  NodeId c = g.input(first_input), s = g.input(first_input + 1), e = g.constant(0.5);
-  if (skewed) c = g.binary(Op::Mul, c, c);
-  std::vector<NodeId> out;
-  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
-    const NodeId x = g.input(first_input + 2 + 2 * i), y = g.input(first_input + 3 + 2 * i);
-    const NodeId c2 = g.binary(Op::Sub, g.binary(Op::Mul, c, x), g.binary(Op::Mul, s, y));
-    const NodeId s2 = g.binary(Op::Add, g.binary(Op::Mul, s, x), g.binary(Op::Mul, c, y));
-    e = g.binary(Op::Add, e, g.binary(Op::Div, c2, g.binary(Op::Add, g.one(), g.binary(Op::Mul, s2, s2))));
-    c = c2;
-    s = s2;
-    out.push_back(e);
-  }
-  return out;
-}
-
-// Two limbs, their values interleaved in one block: [e_0 left, e_0 right, e_1 left, ...],
-// in one column, or (cols 2) the left limb's in column 0 and the right limb's in column 1.
-FunctionDefinition twoLimbsFunction(Graph& g, std::uint32_t cols = 1) {
-  constexpr std::uint32_t inputs = 2 + 2 * kLimbLinks;
-  const std::vector<NodeId> left = limbValues(g, 0), right = limbValues(g, inputs);
-  std::vector<NodeId> values;
-  for (std::uint32_t i = 0; i < kLimbLinks; ++i) {
-    values.push_back(left[i]);
-    values.push_back(right[i]);
-  }
-  return FunctionDefinition{"limbs", {{"x", 2 * inputs}},
-                            {OutputBlock::dense("e", 2 * kLimbLinks / cols, cols, values)}};
-}
-
 struct PairedBuild {
   GeneratedLibrary generated;
   LoadedLibrary library;
