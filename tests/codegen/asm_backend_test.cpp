@@ -72,7 +72,7 @@ void expectGraphValuesAt(const Graph& g, const FunctionDefinition& f, const Comp
 }
 
 // sin and cos of sums and products of the inputs (no kernel takes an input as it is: the
-// kernels run in the body), through long chains of products.
+// kernels run in the body), through long chains of products; n > 2.
 FunctionDefinition computedAngles(Graph& g, std::uint32_t n) {
   std::vector<NodeId> values;
   NodeId carried = g.one();
@@ -83,7 +83,10 @@ FunctionDefinition computedAngles(Graph& g, std::uint32_t n) {
     values.push_back(carried);
     values.push_back(g.binary(Op::Div, s, g.binary(Op::Add, g.constant(2.0), c)));
   }
-  return FunctionDefinition{"computed", {{"x", n}}, {OutputBlock::dense("y", 2 * n, 1, values)}};
+  // A lone sin and a lone cos: the kernel's other result unused.
+  values.push_back(g.unary(Op::Sin, g.binary(Op::Mul, g.input(0), g.input(1))));
+  values.push_back(g.unary(Op::Cos, g.binary(Op::Sub, g.input(1), g.input(2))));
+  return FunctionDefinition{"computed", {{"x", n}}, {OutputBlock::dense("y", 2 * n + 2, 1, values)}};
 }
 
 // Every operation the back end prints, each operand sign in each position, constants on
