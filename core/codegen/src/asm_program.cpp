@@ -289,9 +289,9 @@ class Builder {
     forEachZeroStore(
         chunk_.zero_runs[ins.index], function_.outputs[ins.block].size(),
         [&](std::uint32_t group) {
-          if (!groups_.packs(ins.block, group)) store(MCode::StoreZero4, group);
+          if (!groups_.packs(ins.block, group)) store(MCode::Store4, group);
         },
-        [&](std::uint32_t k) { store(MCode::StoreZero1, k); });
+        [&](std::uint32_t k) { store(MCode::Store, k); });
   }
 
   void emitCompute(const Instr& ins, std::size_t i) {

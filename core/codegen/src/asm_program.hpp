@@ -38,16 +38,14 @@ enum class MCode : std::uint8_t {
   Add, Sub, Mul, Div,  // dst = a op b (scalar double)
   Sqrt,       // dst = sqrt(a)
   Fma,        // dst = sign_product * (a * b) + sign_addend * c
-  And, AndNot, Or, Xor,  // 128-bit bitwise: dst = a & b, ~a & b, a | b, a ^ b
+  And, Xor,   // 128-bit bitwise: dst = a & b, a ^ b
   AddQ, SubQ, // 64-bit integer lanes: dst = a + b, a - b
   ShlQ,       // dst = a << imm (64-bit lanes)
   Pack2,      // dst = [a, b] (128 bits; a zero upper half)
   Low,        // dst = [a, 0] (128 bits; a zero upper half)
   Pack4,      // dst = [a's 128 bits, b's 128 bits] (256 bits)
-  Store4,     // out[block][index .. index+3] = a's 256 bits
+  Store4,     // out[block][index .. index+3] = a's 256 bits (an output group, or the constant 0)
   Store,      // out[block][index] = a
-  StoreZero4, // out[block][index .. index+3] = a (the constant 0, read whole: all lanes zero)
-  StoreZero1, // out[block][index] = a (the constant 0)
   KernelBegin,  // starts a sin-cos region on x = a (the region's registers are free first)
   KernelCheck,  // a = |x|, b = x: beyond 2^19 or not a number, the cold path (libm's sincos)
   KernelEnd,    // ends it: a = sin x, b = cos x (where the cold path joins); imm: its begin

@@ -66,7 +66,7 @@ BlockRegisters blockRegisters(const AsmProgram& p) {
   for (const ValueHome& h : p.homes)
     if (h.kind == ValueHome::Kind::Input) b.input.emplace(h.block, 0);
   for (const MOp& op : p.ops)
-    if (op.code == MCode::Store || op.code == MCode::StoreZero4 || op.code == MCode::StoreZero1)
+    if (op.code == MCode::Store || op.code == MCode::Store4)
       b.output.emplace(op.block, 0);
   int next = 0;
   for (auto& [block, r] : b.input) r = next++;
@@ -297,8 +297,6 @@ class FunctionPrinter {
       case MCode::Sub: printBinary(op, i, "vsubsd", false, false); break;
       case MCode::Div: printBinary(op, i, "vdivsd", false, false); break;
       case MCode::And: printBinary(op, i, bitwise("vpand", "vpandq").c_str(), true, true); break;
-      case MCode::AndNot: printBinary(op, i, bitwise("vpandn", "vpandnq").c_str(), false, true); break;
-      case MCode::Or: printBinary(op, i, bitwise("vpor", "vporq").c_str(), true, true); break;
       case MCode::Xor: printBinary(op, i, bitwise("vpxor", "vpxorq").c_str(), true, true); break;
       case MCode::AddQ: printBinary(op, i, "vpaddq", true, true); break;
       case MCode::SubQ: printBinary(op, i, "vpsubq", false, true); break;
@@ -319,16 +317,10 @@ class FunctionPrinter {
       case MCode::Fma: printFma(op, i); break;
       case MCode::Pack2: case MCode::Low: case MCode::Pack4: printPack(op, i); break;
       case MCode::Store4:
-        emit("vmovupd\t" + ymm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        emit("vmovupd\t" + ymm(inRegister(op.src[0], i)) + ", " + output(op));
         break;
       case MCode::Store:
-        emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op, 0));
-        break;
-      case MCode::StoreZero4:
-        emit("vmovupd\t" + ymm(inRegister(op.src[0], i)) + ", " + output(op, 0));
-        break;
-      case MCode::StoreZero1:
-        emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op, 0));
+        emit("vmovsd\t" + xmm(inRegister(op.src[0], i)) + ", " + output(op));
         break;
       case MCode::KernelBegin: beginRegion(op, i); break;
       case MCode::KernelCheck: {
@@ -365,8 +357,8 @@ class FunctionPrinter {
     finish(op, i);
   }
 
-  std::string output(const MOp& op, std::uint32_t element_offset) const {
-    return std::to_string(8 * (op.index + element_offset)) + "(" + kBlockRegisters[blocks_.output.at(op.block)] + ")";
+  std::string output(const MOp& op) const {
+    return std::to_string(8 * op.index) + "(" + kBlockRegisters[blocks_.output.at(op.block)] + ")";
   }
 
   // dst = a op b: a in a register, b where it is (bitwise: a constant's memory only, its

@@ -284,19 +284,26 @@ std::vector<std::string> compilerFlags(const CompilerOptions& options) {
   return flags;
 }
 
-std::string compilerIdentity(const CompilerOptions& options) {
+namespace {
+
+// The options' compiler's version text; CompileError when it tells none.
+std::string toldVersion(const CompilerOptions& options) {
   const std::string path = resolveCompiler(options);
   const std::string text = versionText(path, Clock::now() + std::chrono::seconds(30));
   if (text.empty())
     throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
+  return text;
+}
+
+}  // namespace
+
+std::string compilerIdentity(const CompilerOptions& options) {
+  const std::string text = toldVersion(options);
   return text.substr(0, text.find('\n'));
 }
 
 bool compilerAssembles(const CompilerOptions& options) {
-  const std::string path = resolveCompiler(options);
-  const std::string text = versionText(path, Clock::now() + std::chrono::seconds(30));
-  if (text.empty())
-    throw CompileError(CompileError::Kind::CannotRun, "'" + path + "' does not tell its version (--version, -v)");
+  const std::string text = toldVersion(options);
   return detail::isGnuGcc(text) || detail::isClang(text);
 }
 

@@ -84,9 +84,9 @@ GeneratedFunctionLibrary generateFunctionLibrary(const Model& model, const Funct
   const std::string& name = result.built.definition.name;
 
   codegen::CompilerOptions compiler = compilerOptionsFor(spec.build, options.compiler);
+  const codegen::CodegenOptions codegen = codegenOptionsFor(spec.build, options.codegen, compiler);
   const auto t_emit = std::chrono::steady_clock::now();
-  const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition},
-                                                                codegenOptionsFor(spec.build, options.codegen, compiler));
+  const codegen::GeneratedLibrary sources = generateLibrary(*result.built.graph, {result.built.definition}, codegen);
   result.emit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_emit).count();
   result.info = sources.functions.at(0);
   for (const codegen::SourceFile& s : sources.sources) result.source_bytes += s.text.size();
