@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <map>
 #include <bit>
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <unordered_map>
 
