@@ -56,6 +56,23 @@ TEST(BuildJob, ABuildIsPublishedAndLoadsBack) {
   EXPECT_TRUE(std::filesystem::is_empty(cache.dir() / "staging")) << "the build's staging directory is left";
 }
 
+// A single-knot build for this CPU is assembly (docs/assembly-backend.md): the entry keeps
+// that source, as it keeps a C build's.
+TEST(BuildJob, AnAssembledBuildKeepsItsSource) {
+  if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
+    GTEST_SKIP() << "the assembly back end needs AVX2 and FMA";
+  TempDir dir;
+  cache::Cache cache = cache::Cache::open(dir / "cache");
+  const std::string spec = R"({"function": "rnea", "outputs": [{"kind": "value"}], "build": {"batch": false}})";
+  const testing::ClaimedBuild b = testing::claimBuild(cache, testing::arm7Urdf(), spec);
+  const BuildOutcome outcome = executeBuild(b.request, [](const std::string&) {});
+  ASSERT_TRUE(outcome.ok) << outcome.error_kind << ": " << outcome.message << "\n" << outcome.compiler_output;
+  const std::optional<cache::Artifact> artifact = cache.find(b.prepared.key);
+  ASSERT_TRUE(artifact.has_value());
+  EXPECT_TRUE(std::filesystem::exists(artifact->dir() / "src" / "library.s.zst"));
+  EXPECT_FALSE(std::filesystem::exists(artifact->dir() / "src" / "library.c.zst"));
+}
+
 TEST(BuildJob, ACompilerErrorIsReportedAndLeavesNothing) {
   TempDir dir;
   cache::Cache cache = cache::Cache::open(dir / "cache");

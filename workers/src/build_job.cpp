@@ -112,12 +112,13 @@ std::string blockSizes(const codegen::FunctionDefinition& definition) {
   return json{{"inputs", inputs}, {"outputs", outputs}}.dump();
 }
 
-// The sources as compiled (.c and .h under the build's src/), not the objects.
+// The sources as compiled (.c and .h, or the assembly's .s, under the build's src/), not
+// the objects.
 std::vector<fs::path> sourceFiles(const fs::path& src_dir) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::recursive_directory_iterator(src_dir)) {
     const auto ext = entry.path().extension();
-    if (entry.is_regular_file() && (ext == ".c" || ext == ".h")) files.push_back(entry.path());
+    if (entry.is_regular_file() && (ext == ".c" || ext == ".h" || ext == ".s")) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   return files;
