@@ -131,14 +131,13 @@ void functionRow(const FunctionDefinition& f, const std::string& prefix, Strings
 // The function in one part, as the C's code without lane pairs; nullopt where C would
 // compute lane pairs (readyFirstSums is false then) or the function is large.
 std::optional<LoweredFunction> lowerWhole(const symbolic::Graph& graph, const FunctionDefinition& f,
-                                          const CodegenOptions& options) {
+                                          const CodegenOptions& options, FunctionPairing& pairing) {
   LoweringOptions lo;
   lo.split_threshold = 0;
   lo.reuse_slots = options.reuse_temporaries;
   lo.output_order_from = options.output_order_from;
-  LanePairMemo memo;
-  lo.ready_first_sums = readyFirstSums(graph, f, &memo);
-  lo.lane_pair_memo = &memo;
+  lo.ready_first_sums = pairing.ready_first_sums;
+  lo.lane_pair_memo = &pairing.memo;
   if (options.lane_pairs && !lo.ready_first_sums) return std::nullopt;
   LoweredFunction lowered = lower(graph, f, lo);
   if (lowered.operations >= kAssemblyBelow || lowered.chunks.size() != 1) return std::nullopt;
@@ -161,15 +160,22 @@ std::optional<AsmTarget> hostAsmTarget() {
 
 std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& graph,
                                                         const std::vector<FunctionDefinition>& functions,
-                                                        const CodegenOptions& options, const AsmTarget& target) {
+                                                        const CodegenOptions& options, const AsmTarget& target,
+                                                        std::vector<FunctionPairing>* pairings) {
+  std::vector<FunctionPairing> found;
+  if (!pairings) {
+    for (const FunctionDefinition& f : functions) found.push_back(pairingOf(graph, f));
+    pairings = &found;
+  }
   GeneratedLibrary lib;
   AsmConstants constants;
   Strings strings;
   std::ostringstream code, data;
   data << "\t.section\t.data.rel.ro,\"aw\"\n\t.p2align 3\n";
   std::ostringstream rows;
-  for (const FunctionDefinition& f : functions) {
-    const std::optional<LoweredFunction> whole = lowerWhole(graph, f, options);
+  for (std::size_t i = 0; i < functions.size(); ++i) {
+    const FunctionDefinition& f = functions[i];
+    const std::optional<LoweredFunction> whole = lowerWhole(graph, f, options, (*pairings)[i]);
     if (!whole) return std::nullopt;
     const LoweredFunction& lowered = *whole;
     std::optional<AsmProgram> program = buildAsmProgram(lowered.chunks[0], f);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "asm_registers.hpp"
+#include "lane_pairs.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
 
 namespace robodiff::codegen::detail {
@@ -30,8 +31,10 @@ std::optional<AsmTarget> hostAsmTarget();
 // what only C prints, has lane pairs (which C computes two at a time: a twin-limbed
 // robot's functions ran up to 1.9x faster so) or kAssemblyBelow operations or more.
 // eval_batch loops over eval (batch width 1).
+// `pairings`: each function's (lane_pairs.hpp), when the caller found them; else found here.
 std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& graph,
                                                         const std::vector<FunctionDefinition>& functions,
-                                                        const CodegenOptions& options, const AsmTarget& target);
+                                                        const CodegenOptions& options, const AsmTarget& target,
+                                                        std::vector<FunctionPairing>* pairings = nullptr);
 
 }  // namespace robodiff::codegen::detail

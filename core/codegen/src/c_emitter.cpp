@@ -57,14 +57,14 @@ struct Lowerings {
 // but Talos ABA value (42% paired) 831 -> 969.
 constexpr double kSparselyPairedShare = 0.2;
 
-Lowerings lowerForC(const symbolic::Graph& graph, const FunctionDefinition& f, const CodegenOptions& options) {
+Lowerings lowerForC(const symbolic::Graph& graph, const FunctionDefinition& f, const CodegenOptions& options,
+                    detail::FunctionPairing& pairing) {
   detail::LoweringOptions lo;
   lo.split_threshold = options.split_threshold;
   lo.reuse_slots = options.reuse_temporaries;
   lo.output_order_from = options.output_order_from;
-  detail::LanePairMemo memo;
-  lo.ready_first_sums = detail::readyFirstSums(graph, f, &memo);
-  lo.lane_pair_memo = &memo;
+  lo.ready_first_sums = pairing.ready_first_sums;
+  lo.lane_pair_memo = &pairing.memo;
   Lowerings l;
   auto lowerBoth = [&] {
     lo.lane_pairs = options.lane_pairs ? detail::LanePairMode::Order : detail::LanePairMode::Off;
@@ -264,9 +264,11 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
     f.validate(graph);
     if (!names.insert(f.name).second) throw std::invalid_argument("generateLibrary: two functions named '" + f.name + "'");
   }
+  std::vector<detail::FunctionPairing> pairings;
+  for (const auto& f : functions) pairings.push_back(detail::pairingOf(graph, f));
   if (options.assembly && w == 1)
     if (auto target = detail::hostAsmTarget())
-      if (auto lib = detail::generateAssemblyLibrary(graph, functions, options, *target)) return *lib;
+      if (auto lib = detail::generateAssemblyLibrary(graph, functions, options, *target, &pairings)) return *lib;
   const std::string head = detail::prologue(options);
   const bool batched = w != 1;  // else RD_VECTOR is 0: no SIMD code to write or compile
   GeneratedLibrary lib;
@@ -276,8 +278,9 @@ GeneratedLibrary generateLibrary(const symbolic::Graph& graph, const std::vector
   main << head;
   std::ostringstream table;
   table << "static const robodiff_function_desc rd_functions[] = {\n";
-  for (const auto& f : functions) {
-    const Lowerings l = lowerForC(graph, f, options);
+  for (std::size_t i = 0; i < functions.size(); ++i) {
+    const FunctionDefinition& f = functions[i];
+    const Lowerings l = lowerForC(graph, f, options, pairings[i]);
     lib.functions.push_back(functionInfo(f, l));
     const std::size_t parts = l.plain.chunks.size();
     main << "/* ---- " << f.name << ": " << l.plain.operations << " operations, " << parts << " part(s) ---- */\n\n";

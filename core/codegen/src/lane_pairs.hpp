@@ -88,4 +88,12 @@ struct LanePairMemo {
   bool filled = false;
 };
 
+// A function's readyFirstSums and the memo its paired lowering filled: found once for
+// all of the function's lowerings, the assembly's and, where that does not apply, the
+// C's (each a paired lowering otherwise).
+struct FunctionPairing {
+  LanePairMemo memo;
+  bool ready_first_sums = false;
+};
+
 }  // namespace robodiff::codegen::detail

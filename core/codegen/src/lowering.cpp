@@ -555,4 +555,10 @@ bool readyFirstSums(const Graph& graph, const FunctionDefinition& function, Lane
   return lower(graph, function, paired).lane_pairs == 0;
 }
 
+FunctionPairing pairingOf(const Graph& graph, const FunctionDefinition& function) {
+  FunctionPairing p;
+  p.ready_first_sums = readyFirstSums(graph, function, &p.memo);
+  return p;
+}
+
 }  // namespace robodiff::codegen::detail

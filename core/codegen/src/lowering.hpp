@@ -151,4 +151,8 @@ LoweredFunction lower(const symbolic::Graph& graph, const FunctionDefinition& fu
 // The C code and the interpreter both ask, so they compute the same chains.
 bool readyFirstSums(const symbolic::Graph& graph, const FunctionDefinition& function, LanePairMemo* memo = nullptr);
 
+// readyFirstSums with the memo it fills (lane_pairs.hpp).
+struct FunctionPairing;
+FunctionPairing pairingOf(const symbolic::Graph& graph, const FunctionDefinition& function);
+
 }  // namespace robodiff::codegen::detail
