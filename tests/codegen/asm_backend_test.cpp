@@ -9,11 +9,9 @@
 #include <limits>
 #include <random>
 
-#include "asm_emitter.hpp"
-#include "codegen_fixtures.hpp"
+#include "asm_fixtures.hpp"
 #include "robodiff/codegen/c_emitter.hpp"
 #include "robodiff/codegen/compiler.hpp"
-#include "robodiff/codegen/loaded_library.hpp"
 #include "support/temp_dir.hpp"
 
 namespace robodiff::codegen {
@@ -21,56 +19,6 @@ namespace {
 
 using namespace testing;
 using robodiff::testing::TempDir;
-
-// The targets this host runs: 16 registers wherever the back end applies, 32 with AVX-512.
-std::vector<detail::AsmTarget> hostTargets() {
-  std::vector<detail::AsmTarget> targets;
-  const auto host = detail::hostAsmTarget();
-  if (!host) return targets;
-  targets.push_back(detail::AsmTarget{16});
-  if (host->xmm_registers == 32) targets.push_back(detail::AsmTarget{32});
-  return targets;
-}
-
-#define SKIP_WITHOUT_ASSEMBLY()                                                          \
-  if (hostTargets().empty()) GTEST_SKIP() << "the assembly back end needs x86-64 with AVX2 and FMA"
-
-// Without lane pairs: functions C would compute in pairs (these fixtures' rotation
-// entries, column by column) are assembled too.
-CodegenOptions withoutPairs() {
-  CodegenOptions options;
-  options.lane_pairs = false;
-  return options;
-}
-
-GeneratedLibrary assembly(const Graph& g, const std::vector<FunctionDefinition>& fs, const detail::AsmTarget& target) {
-  std::optional<GeneratedLibrary> lib = detail::generateAssemblyLibrary(g, fs, withoutPairs(), target);
-  if (!lib) throw std::runtime_error("no assembly for these functions");
-  return *lib;
-}
-
-LoadedLibrary compiled(const GeneratedLibrary& lib, const TempDir& dir, const std::string& name) {
-  return LoadedLibrary::open(compileLibrary(lib, dir / (name + ".so")).library);
-}
-
-// Every output within `tolerance` of the graph's own evaluation at `in`, relative to
-// the value or 1, whichever is larger (values near zero come from cancellation).
-bool closeScaled(double got, double want, double tolerance) {
-  if (std::isnan(got) || std::isnan(want)) return std::isnan(got) && std::isnan(want);
-  return std::abs(got - want) <= tolerance * std::max(1.0, std::abs(want));
-}
-
-void expectGraphValuesAt(const Graph& g, const FunctionDefinition& f, const CompiledFunction& fn,
-                         const std::vector<std::vector<double>>& in, double tolerance, const std::string& what) {
-  std::vector<double> work(fn.workSize() + 1);
-  const auto expected = reference(g, f, in, 0);
-  auto out = outputBuffers(f, 1);
-  fn.evaluate(pointers(in, f).data(), pointers(out, f).data(), work.data());
-  for (std::size_t b = 0; b < out.size(); ++b)
-    for (std::size_t k = 0; k < out[b].size(); ++k)
-      EXPECT_TRUE(closeScaled(out[b][k], expected[b][k], tolerance))
-          << what << ", block " << b << ", element " << k << ": " << out[b][k] << " against " << expected[b][k];
-}
 
 // sin and cos of sums and products of the inputs (no kernel takes an input as it is: the
 // kernels run in the body), through long chains of products; n > 2.
@@ -361,9 +309,6 @@ TEST(AsmBackend, WhatTheAssemblyDoesNotPrintStaysC) {
   const FunctionDefinition with_libm = randomFunction(g, "libm", 5, 60);  // exp, atan2, ... as calls
   ASSERT_TRUE(opsUsed(g, with_libm)[static_cast<int>(Op::Exp)] || opsUsed(g, with_libm)[static_cast<int>(Op::Atan2)]);
   EXPECT_FALSE(detail::generateAssemblyLibrary(g, {signs, with_libm}, withoutPairs(), target)) << "a libm call";
-  const FunctionDefinition mirrored = twoLimbsFunction(g);  // C computes its twins in lane pairs
-  EXPECT_FALSE(detail::generateAssemblyLibrary(g, {mirrored}, {}, target)) << "lane pairs";
-  EXPECT_TRUE(detail::generateAssemblyLibrary(g, {mirrored}, withoutPairs(), target));
   EXPECT_FALSE(detail::generateAssemblyLibrary(g, {manyLiveValues(g, detail::kAssemblyBelow)}, withoutPairs(), target))
       << "a large function";
   FunctionDefinition blocks{"blocks", {}, {}};
@@ -381,7 +326,6 @@ TEST(AsmBackend, WhatTheAssemblyDoesNotPrintStaysC) {
   options.assembly = true;
   EXPECT_EQ(generateLibrary(g, {signs}, options).sources[0].path, "library.s");
   EXPECT_EQ(generateLibrary(g, {signs, with_libm}, options).sources[0].path, "library.c");
-  EXPECT_EQ(generateLibrary(g, {mirrored}, options).sources[0].path, "library.c");
   options.batch_width = 0;
   EXPECT_EQ(generateLibrary(g, {signs}, options).sources[0].path, "library.c") << "batched code";
 }

@@ -1,7 +1,7 @@
 // Which builds the assembly back end writes (codegenOptionsFor, CodegenOptions::assembly):
 // single-knot ("batch": false) builds for this CPU at -O2 or -O3 without fast-math, by a
-// driver that assembles, of functions without lane pairs. Their values equal the
-// interpreter's and the reference's; every other build is C.
+// driver that assembles; a twin-limbed robot's with their lane pairs. Their values equal
+// the interpreter's and the reference's; every other build is C.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -46,18 +46,15 @@ std::string sourceOf(const fs::path& out_dir) {
   return "";
 }
 
-TEST(AssemblyBuild, TheArmsValueFunctionsAreAssembledAndEqualTheInterpreterAndTheReference) {
-  if (!hostRunsAssembly()) GTEST_SKIP() << "the assembly back end needs x86-64 with AVX2 and FMA";
-  const Model& model = libraryArm7();
-  const std::vector<FunctionSpec> specs = {
-      valueSpec("rnea", R"({"batch": false})"), valueSpec("crba", R"({"batch": false})"),
-      valueSpec("aba", R"({"batch": false, "optimization": "O3"})"),  // 2,208 operations
-      valueSpec("frame_jacobian", R"({"batch": false})", R"("frame": "tool", "reference": "LOCAL_WORLD_ALIGNED", )")};
+// Each spec's library is assembly, its values equal to the interpreter's and the
+// reference's; `paired`: computed with lane pairs.
+void expectAssembledAsTheReference(const Model& model, const std::vector<FunctionSpec>& specs, bool paired) {
   for (const FunctionSpec& spec : specs) {
     SCOPED_TRACE(spec.functionName());
     TempDir dir;
     const GeneratedFunctionLibrary lib = generateFunctionLibrary(model, spec, dir.path());
     EXPECT_EQ(sourceOf(dir.path()), "library.s");
+    EXPECT_EQ(lib.info.lane_pairs > 0, paired);
     const codegen::LoadedLibrary loaded = codegen::LoadedLibrary::open(lib.library);
     const codegen::CompiledFunction f = loaded.function(lib.built.definition.name);
     const codegen::Interpreter interpreter(*lib.built.graph, lib.built.definition);
@@ -72,6 +69,22 @@ TEST(AssemblyBuild, TheArmsValueFunctionsAreAssembledAndEqualTheInterpreterAndTh
       EXPECT_LE((got - reference).cwiseAbs().maxCoeff(), tolerance * scale) << "seed " << seed;
     }
   }
+}
+
+TEST(AssemblyBuild, TheArmsValueFunctionsAreAssembledAndEqualTheInterpreterAndTheReference) {
+  if (!hostRunsAssembly()) GTEST_SKIP() << "the assembly back end needs x86-64 with AVX2 and FMA";
+  expectAssembledAsTheReference(
+      libraryArm7(),
+      {valueSpec("rnea", R"({"batch": false})"), valueSpec("crba", R"({"batch": false})"),
+       valueSpec("aba", R"({"batch": false, "optimization": "O3"})"),  // 2,208 operations
+       valueSpec("frame_jacobian", R"({"batch": false})", R"("frame": "tool", "reference": "LOCAL_WORLD_ALIGNED", )")},
+      false);
+}
+
+// The quadruped's legs mirror each other: its mass matrix's twins are computed in lane pairs.
+TEST(AssemblyBuild, TheQuadrupedsMassMatrixIsAssembledWithLanePairs) {
+  if (!hostRunsAssembly()) GTEST_SKIP() << "the assembly back end needs x86-64 with AVX2 and FMA";
+  expectAssembledAsTheReference(quadruped(), {valueSpec("crba", R"({"batch": false})")}, true);
 }
 
 TEST(AssemblyBuild, BatchedFastMathUnoptimisedGenericAndTccBuildsAreC) {
@@ -92,14 +105,6 @@ TEST(AssemblyBuild, BatchedFastMathUnoptimisedGenericAndTccBuildsAreC) {
     generateFunctionLibrary(model, valueSpec("crba", c.build), dir.path(), options);
     EXPECT_EQ(sourceOf(dir.path()), "library.c");
   }
-}
-
-// The quadruped's legs mirror each other: C computes its mass matrix's twins in lane pairs.
-TEST(AssemblyBuild, ATwinLimbedRobotsValueStaysC) {
-  TempDir dir;
-  const GeneratedFunctionLibrary lib = generateFunctionLibrary(quadruped(), valueSpec("crba", R"({"batch": false})"), dir.path());
-  EXPECT_GT(lib.info.lane_pairs, 0u);
-  EXPECT_EQ(sourceOf(dir.path()), "library.c");
 }
 
 TEST(AssemblyBuild, OnlyOptimisedUnbatchedBuildsForThisCpuAskForAssembly) {

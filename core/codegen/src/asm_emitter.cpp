@@ -128,8 +128,9 @@ void functionRow(const FunctionDefinition& f, const std::string& prefix, Strings
   r.quad(offsetof(robodiff_function_desc, eval_batch), prefix + "_eval_batch");
 }
 
-// The function in one part, as the C's code without lane pairs; nullopt where C would
-// compute lane pairs (readyFirstSums is false then) or the function is large.
+// The function in one part, with the C's lane pairs where it computes any (readyFirstSums
+// is false then), each sin-cos on its own (the entry kernels take four lanes); nullopt
+// where the function is large.
 std::optional<LoweredFunction> lowerWhole(const symbolic::Graph& graph, const FunctionDefinition& f,
                                           const CodegenOptions& options, FunctionPairing& pairing) {
   LoweringOptions lo;
@@ -138,9 +139,11 @@ std::optional<LoweredFunction> lowerWhole(const symbolic::Graph& graph, const Fu
   lo.output_order_from = options.output_order_from;
   lo.ready_first_sums = pairing.ready_first_sums;
   lo.lane_pair_memo = &pairing.memo;
-  if (options.lane_pairs && !lo.ready_first_sums) return std::nullopt;
+  if (options.lane_pairs && !lo.ready_first_sums) lo.lane_pairs = LanePairMode::Emit;
+  lo.sincos_lanes = false;
   LoweredFunction lowered = lower(graph, f, lo);
-  if (lowered.operations >= kAssemblyBelow || lowered.chunks.size() != 1) return std::nullopt;
+  const std::uint32_t instructions = lowered.operations - lowered.lane_pairs;
+  if (instructions >= kAssemblyBelow || lowered.chunks.size() != 1) return std::nullopt;
   return lowered;
 }
 
@@ -190,6 +193,7 @@ std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& g
     info.needed_nodes = lowered.needed_nodes;
     info.operations = lowered.operations;
     info.sincos_pairs = lowered.sincos_pairs;
+    info.lane_pairs = lowered.lane_pairs;
     info.max_locals = lowered.chunks[0].slots;
     lib.functions.push_back(info);
   }

@@ -16,7 +16,8 @@
 
 namespace robodiff::codegen::detail {
 
-// Functions of this many operations or more are C. Measured (direct calls): value rows
+// Functions of this many instructions (operations less lane pairs) or more are C.
+// Measured without lane pairs (direct calls): value rows
 // of 463-2,662 operations ran 0-12% faster as assembly (the Panda's, arm7's, the
 // quadruped's RNEA), those of 5,399-8,228 15-30% slower (the quadruped's ABA value, the
 // Panda's RNEA and ABA Jacobians, its Euler step with Jacobians). docs/code-generation.md,
@@ -28,9 +29,9 @@ inline constexpr std::uint32_t kAssemblyBelow = 3000;
 std::optional<AsmTarget> hostAsmTarget();
 
 // The library as assembly (one source, library.s), or nullopt when a function needs
-// what only C prints, has lane pairs (which C computes two at a time: a twin-limbed
-// robot's functions ran up to 1.9x faster so) or kAssemblyBelow operations or more.
-// eval_batch loops over eval (batch width 1).
+// what only C prints or has kAssemblyBelow instructions or more. A function's lane pairs
+// (C's choice, options.lane_pairs) are computed by packed instructions. eval_batch
+// loops over eval (batch width 1).
 // `pairings`: each function's (lane_pairs.hpp), when the caller found them; else found here.
 std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& graph,
                                                         const std::vector<FunctionDefinition>& functions,

@@ -8,12 +8,10 @@
 namespace robodiff::codegen::detail {
 namespace {
 
-std::uint64_t bitsOf(double x) { return std::bit_cast<std::uint64_t>(x); }
-
 // %ymm0 = four arguments -> %ymm1 = their sines, %ymm2 their cosines (ymm3-15 clobbered).
 // RD_SC_VECTOR's operations, contracted as a C compiler contracts them.
 std::string vectorKernel(AsmConstants& k) {
-  auto c = [&](double x) { return k.vector(bitsOf(x)) + "(%rip)"; };
+  auto c = [&](double x) { return k.vector(std::bit_cast<std::uint64_t>(x)) + "(%rip)"; };
   auto q = [&](std::uint64_t bits) { return k.vector(bits) + "(%rip)"; };
   std::ostringstream s;
   s << "\tvmovapd\t" << c(RD_SC_ROUNDER) << ", %ymm3\n"  // t = x 2/pi + rounder

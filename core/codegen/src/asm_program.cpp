@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 
 #include "output_groups.hpp"
@@ -39,15 +40,21 @@ class Builder {
     group_values_.assign(groups_.groups.size() * 4, kNoValue);
     for (std::size_t i = 0; i < chunk_.code.size(); ++i) emitInstr(chunk_.code[i], i);
     program_.wide.resize(program_.values(), false);
+    program_.pair.resize(program_.values(), false);
     return std::move(program_);
   }
 
  private:
-  // Everything but libm calls other than sincos, min, max and selects.
+  // Everything but libm calls other than sincos, min, max and selects, transfers
+  // (one part only) and sin-cos lanes (the kernels at entry take four lanes themselves).
   bool supported() const {
     for (const Instr& ins : chunk_.code) {
       switch (ins.kind) {
         case InstrKind::LoadInput: case InstrKind::SinCos: case InstrKind::StoreOutput: case InstrKind::ZeroOutput:
+        case InstrKind::PackPair:
+          break;
+        case InstrKind::ComputePair:  // the operations lane pairs take (lane_pairs.cpp)
+          if (ins.op != Op::Add && ins.op != Op::Sub && ins.op != Op::Mul && ins.op != Op::Div) return false;
           break;
         case InstrKind::Compute:
           switch (ins.op) {
@@ -59,7 +66,7 @@ class Builder {
           }
           break;
         default:
-          return false;  // lane pairs and transfers: only C prints them
+          return false;
       }
     }
     return true;
@@ -94,13 +101,20 @@ class Builder {
            (ins.kind == InstrKind::Compute && (ins.op == Op::Sin || ins.op == Op::Cos));
   }
 
-  // The products read once, by a sum: those are fused into it.
+  // A local's key: scalar slots and pair slots are numbered apart.
+  static constexpr std::uint64_t kPairKey = std::uint64_t{1} << 32;
+  static std::uint64_t key(const Operand& o) {
+    return o.kind == Operand::Kind::Slot ? o.slot : kPairKey | o.slot;
+  }
+
+  // The products read once, by a sum of their kind (scalar or pair): those are fused into it.
   void countUses() {
-    std::unordered_map<std::uint32_t, std::size_t> slot_def;  // slot -> defining instruction
+    std::unordered_map<std::uint64_t, std::size_t> slot_def;  // local -> defining instruction
     std::vector<int> uses(chunk_.code.size(), 0);
     auto definer = [&](const Operand& o) -> std::size_t {
-      if (o.kind != Operand::Kind::Slot) return SIZE_MAX;
-      auto it = slot_def.find(o.slot);
+      if (o.kind != Operand::Kind::Slot && o.kind != Operand::Kind::Pair && o.kind != Operand::Kind::Lane)
+        return SIZE_MAX;
+      auto it = slot_def.find(key(o));
       return it == slot_def.end() ? SIZE_MAX : it->second;
     };
     std::vector<std::array<std::size_t, 3>> readers(chunk_.code.size());
@@ -112,17 +126,18 @@ class Builder {
       }
       if (ins.kind == InstrKind::LoadInput || ins.kind == InstrKind::Compute) slot_def[ins.dst] = i;
       if (ins.kind == InstrKind::SinCos) slot_def[ins.dst] = slot_def[ins.dst2] = SIZE_MAX;
+      if (ins.kind == InstrKind::ComputePair || ins.kind == InstrKind::PackPair) slot_def[kPairKey | ins.dst] = i;
     }
     fused_.assign(chunk_.code.size(), false);
     fused_into_.assign(chunk_.code.size(), -1);
     for (std::size_t i = 0; i < chunk_.code.size(); ++i) {
       const Instr& ins = chunk_.code[i];
-      if (ins.kind != InstrKind::Compute || (ins.op != Op::Add && ins.op != Op::Sub)) continue;
+      if (!isArithmetic(ins) || (ins.op != Op::Add && ins.op != Op::Sub)) continue;
       for (int a = 1; a >= 0; --a) {
         const std::size_t d = readers[i][a];
-        if (d == SIZE_MAX || uses[d] != 1) continue;
+        if (d == SIZE_MAX || uses[d] != 1 || ins.args[a].kind == Operand::Kind::Lane) continue;
         const Instr& def = chunk_.code[d];
-        if (def.kind != InstrKind::Compute || def.op != Op::Mul || fused_[d]) continue;
+        if (def.kind != ins.kind || def.op != Op::Mul || fused_[d]) continue;
         fused_[d] = true;
         fused_into_[i] = a;
         break;
@@ -130,28 +145,44 @@ class Builder {
     }
   }
 
+  static bool isArithmetic(const Instr& ins) {
+    return ins.kind == InstrKind::Compute || ins.kind == InstrKind::ComputePair;
+  }
   static bool reads(const Instr& ins, int a) {
     switch (ins.kind) {
-      case InstrKind::Compute: return a < symbolic::arity(ins.op);
+      case InstrKind::Compute: case InstrKind::ComputePair: return a < symbolic::arity(ins.op);
+      case InstrKind::PackPair: return a < 2;
       case InstrKind::SinCos: case InstrKind::StoreOutput: return a == 0;
       default: return false;
     }
   }
 
-  std::uint32_t newValue(ValueHome home = {}) {
+  // A value: a pair while a lane pair's operation is built (packed_).
+  std::uint32_t newValue(ValueHome home = {}, bool pair = false) {
     program_.homes.push_back(home);
+    program_.pair.resize(program_.values(), false);
+    program_.pair.back() = pair || packed_;
     return program_.values() - 1;
   }
-  // One value per constant: the allocator keeps one read often in a register.
-  std::uint32_t constant(std::uint64_t bits) {
-    auto [it, fresh] = constants_.emplace(bits, kNoValue);
+  // One value per constant: the allocator keeps one read often in a register. While a
+  // lane pair's operation is built, the constant in both lanes.
+  std::uint32_t constant(std::uint64_t bits) { return packed_ ? constantPair(bits, bits) : constantPair(bits, 0, false); }
+  std::uint32_t constant(double x) { return constant(bitsOf(x)); }
+  std::uint32_t constantPair(std::uint64_t low, std::uint64_t high, bool pair = true) {
+    auto [it, fresh] = constants_.emplace(std::make_tuple(low, high, pair), kNoValue);
     if (!fresh) return it->second;
     ValueHome h;
     h.kind = ValueHome::Kind::Constant;
-    h.bits = bits;
-    return it->second = newValue(h);
+    h.bits = low;
+    h.bits_high = pair ? high : 0;
+    return it->second = newValue(h, pair);
   }
-  std::uint32_t constant(double x) { return constant(bitsOf(x)); }
+  // A constant with its sign (both lanes' for a pair) flipped.
+  std::uint32_t flipped(std::uint32_t v) {
+    const ValueHome h = program_.homes[v];
+    if (!program_.pair[v]) return constantPair(h.bits ^ kSignBit, 0, false);
+    return constantPair(h.bits ^ kSignBit, h.bits_high ^ kSignBit);
+  }
 
   std::uint32_t emit(MCode code, std::uint32_t a = kNoValue, std::uint32_t b = kNoValue, std::uint32_t c = kNoValue) {
     MOp op;
@@ -174,7 +205,8 @@ class Builder {
 
   Signed operand(const Operand& o) {
     switch (o.kind) {
-      case Operand::Kind::Slot: return {slot_value_.at(o.slot), o.negated};
+      case Operand::Kind::Slot: case Operand::Kind::Pair: return {local_.at(key(o)), o.negated};
+      case Operand::Kind::Lane: return {lane(local_.at(key(o)), o.lane), o.negated};
       case Operand::Kind::Constant: return {constant(o.value), false};
       case Operand::Kind::Input: {
         ValueHome h;
@@ -183,13 +215,51 @@ class Builder {
         h.index = o.index;
         return {newValue(h), o.negated};
       }
-      default: throw std::logic_error("asm_program: a lane operand");
     }
+    throw std::logic_error("asm_program: an unknown operand");
+  }
+
+  // A pair's lane as a scalar: a constant's or an input's own value; lane 0 of a
+  // computed pair the pair itself (scalar operations read the low lane), lane 1 moved
+  // out once.
+  std::uint32_t lane(std::uint32_t pair, std::uint8_t which) {
+    const ValueHome h = program_.homes[pair];
+    if (h.kind == ValueHome::Kind::Constant) return constantPair(which ? h.bits_high : h.bits, 0, false);
+    if (h.kind == ValueHome::Kind::Input) {
+      ValueHome x = h;
+      x.index += which;
+      return newValue(x);
+    }
+    if (which == 0) return pair;
+    auto [it, fresh] = high_of_.emplace(pair, kNoValue);
+    if (fresh) it->second = emit(MCode::High, pair);
+    return it->second;
   }
   // The operand's value with its sign applied.
   std::uint32_t plain(const Operand& o) {
     const Signed s = operand(o);
     return s.negated ? negate(s.value) : s.value;
+  }
+
+  // The pair [x, y] of two scalar operands: two constants one 16-byte constant, two
+  // adjacent inputs read at once, one value duplicated, else one unpack.
+  std::uint32_t pack(const Operand& x, const Operand& y) {
+    const Signed a = operand(x), b = operand(y);
+    const ValueHome ha = program_.homes[a.value], hb = program_.homes[b.value];
+    if (ha.kind == ValueHome::Kind::Constant && hb.kind == ValueHome::Kind::Constant)
+      return constantPair(ha.bits ^ (a.negated ? kSignBit : 0), hb.bits ^ (b.negated ? kSignBit : 0));
+    if (ha.kind == ValueHome::Kind::Input && hb.kind == ValueHome::Kind::Input && ha.block == hb.block &&
+        hb.index == ha.index + 1 && !a.negated && !b.negated)
+      return newValue(ha, true);
+    if (a.value == b.value && a.negated == b.negated) {
+      const std::uint32_t d = emit(MCode::Dup, plain(x));
+      program_.pair[d] = true;
+      return d;
+    }
+    const std::uint32_t pa = plain(x), pb = plain(y);
+    const std::uint32_t d = emit(MCode::Pack2, pa, pb);
+    program_.pair[d] = true;
+    return d;
   }
 
   void emitInstr(const Instr& ins, std::size_t i) {
@@ -199,15 +269,15 @@ class Builder {
         h.kind = ValueHome::Kind::Input;
         h.block = ins.block;
         h.index = ins.index;
-        slot_value_[ins.dst] = newValue(h);
+        local_[ins.dst] = newValue(h);
         return;
       }
       case InstrKind::Compute: return emitCompute(ins, i);
       case InstrKind::SinCos: {
         if (kernels_at_entry_) return entryKernelResults(ins);
         const auto [s, c] = sincos(plain(ins.args[0]));
-        slot_value_[ins.dst] = s;
-        slot_value_[ins.dst2] = c;
+        local_[ins.dst] = s;
+        local_[ins.dst2] = c;
         return;
       }
       case InstrKind::StoreOutput: {
@@ -222,6 +292,12 @@ class Builder {
         return;
       }
       case InstrKind::ZeroOutput: return emitZeros(ins);
+      case InstrKind::PackPair: local_[kPairKey | ins.dst] = pack(ins.args[0], ins.args[1]); return;
+      case InstrKind::ComputePair:
+        packed_ = true;  // results and constants in both lanes
+        emitCompute(ins, i);
+        packed_ = false;
+        return;
       default: throw std::logic_error("asm_program: an instruction only C prints");
     }
   }
@@ -229,19 +305,19 @@ class Builder {
   // sin and cos of an input, computed at entry: values at home in the frame (a lone sin
   // or cos, ins.op, takes one of them).
   void entryKernelResults(const Instr& ins) {
-    const ValueHome& x = program_.homes.at(slot_value_.at(ins.args[0].slot));
+    const ValueHome& x = program_.homes.at(local_.at(ins.args[0].slot));
     const std::uint32_t lane = lane_of_.at({x.block, x.index});
     ValueHome h;
     h.kind = ValueHome::Kind::EntryKernel;
     h.index = 64 * (lane / 4) + 8 * (lane % 4);
     if (ins.kind == InstrKind::Compute) {
       if (ins.op == Op::Cos) h.index += 32;
-      slot_value_[ins.dst] = newValue(h);
+      local_[ins.dst] = newValue(h);
       return;
     }
-    slot_value_[ins.dst] = newValue(h);
+    local_[ins.dst] = newValue(h);
     h.index += 32;
-    slot_value_[ins.dst2] = newValue(h);
+    local_[ins.dst2] = newValue(h);
   }
 
   // An element of an output group; at the group's last store, the group's four
@@ -295,38 +371,39 @@ class Builder {
   }
 
   void emitCompute(const Instr& ins, std::size_t i) {
+    const std::uint64_t dst = ins.kind == InstrKind::ComputePair ? kPairKey | ins.dst : ins.dst;
     if (fused_[i]) {  // computed by its sum
-      products_[ins.dst] = {operand(ins.args[0]), operand(ins.args[1])};
-      slot_value_[ins.dst] = kNoValue;
+      products_[dst] = {operand(ins.args[0]), operand(ins.args[1])};
+      local_[dst] = kNoValue;
       return;
     }
     switch (ins.op) {
-      case Op::Add: case Op::Sub: return slot_value_[ins.dst] = sum(ins, i), void();
+      case Op::Add: case Op::Sub: return local_[dst] = sum(ins, i), void();
       case Op::Mul: case Op::Div: {
         Signed a = operand(ins.args[0]), b = operand(ins.args[1]);
         bool negative = a.negated != b.negated;
         for (Signed* x : {&a, &b})  // the sign into a constant factor
           if (negative && program_.homes[x->value].kind == ValueHome::Kind::Constant) {
-            x->value = constant(program_.homes[x->value].bits ^ kSignBit);
+            x->value = flipped(x->value);
             negative = false;
           }
         const std::uint32_t r = emit(ins.op == Op::Mul ? MCode::Mul : MCode::Div, a.value, b.value);
-        slot_value_[ins.dst] = negative ? negate(r) : r;
+        local_[dst] = negative ? negate(r) : r;
         return;
       }
       case Op::Neg: {
         const Signed a = operand(ins.args[0]);
-        slot_value_[ins.dst] = a.negated ? a.value : negate(a.value);
+        local_[dst] = a.negated ? a.value : negate(a.value);
         return;
       }
-      case Op::Sqrt: slot_value_[ins.dst] = emit(MCode::Sqrt, plain(ins.args[0])); return;
+      case Op::Sqrt: local_[dst] = emit(MCode::Sqrt, plain(ins.args[0])); return;
       case Op::Sin: case Op::Cos: {
         if (kernels_at_entry_) return entryKernelResults(ins);
         const auto [s, c] = sincos(plain(ins.args[0]));
-        slot_value_[ins.dst] = ins.op == Op::Sin ? s : c;
+        local_[dst] = ins.op == Op::Sin ? s : c;
         return;
       }
-      case Op::Abs: slot_value_[ins.dst] = emit(MCode::And, operand(ins.args[0]).value, constant(kAbsMask)); return;
+      case Op::Abs: local_[dst] = emit(MCode::And, operand(ins.args[0]).value, constant(kAbsMask)); return;
       default: throw std::logic_error("asm_program: an unsupported operation");
     }
   }
@@ -337,7 +414,7 @@ class Builder {
     if (ins.op == Op::Sub) t[1].negated = !t[1].negated;
     const int p = fused_into_[i];
     if (p >= 0) {
-      const auto& [a, b] = products_.at(ins.args[p].slot);
+      const auto& [a, b] = products_.at(key(ins.args[p]));
       const Signed& addend = t[1 - p];
       const bool negative_product = t[p].negated != (a.negated != b.negated);
       return fma(a.value, b.value, addend.value, negative_product, addend.negated);
@@ -348,7 +425,8 @@ class Builder {
     return negate(emit(MCode::Add, t[0].value, t[1].value));
   }
   Signed operandOrProduct(const Operand& o) {
-    if (o.kind == Operand::Kind::Slot && slot_value_.at(o.slot) == kNoValue) return {kNoValue, o.negated};
+    if ((o.kind == Operand::Kind::Slot || o.kind == Operand::Kind::Pair) && local_.at(key(o)) == kNoValue)
+      return {kNoValue, o.negated};
     return operand(o);
   }
 
@@ -414,10 +492,12 @@ class Builder {
   AsmProgram program_;
   std::vector<bool> fused_;
   std::vector<int> fused_into_;  // per sum: which operand is its fused product, or -1
-  std::unordered_map<std::uint32_t, std::uint32_t> slot_value_;
-  std::unordered_map<std::uint32_t, std::pair<Signed, Signed>> products_;  // fused product's slot -> factors
+  std::unordered_map<std::uint64_t, std::uint32_t> local_;  // local (key()) -> its value
+  std::unordered_map<std::uint64_t, std::pair<Signed, Signed>> products_;  // fused product's local -> factors
+  bool packed_ = false;  // a lane pair's operation is being built
+  std::unordered_map<std::uint32_t, std::uint32_t> high_of_;  // pair -> its lane 1
+  std::map<std::tuple<std::uint64_t, std::uint64_t, bool>, std::uint32_t> constants_;  // (bits, high, pair) -> value
   bool kernels_at_entry_ = false;  // the kernels run at entry
-  std::unordered_map<std::uint64_t, std::uint32_t> constants_;  // bits -> value
   OutputGroupPlan groups_;
   std::vector<std::uint32_t> group_values_;  // per group, its four elements' values (kNoValue: zero)
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> lane_of_;  // (block, index) -> lane

@@ -11,6 +11,10 @@
 //    may be read straight from memory by the operand that takes memory;
 //  - where stores bound the function, four output elements are stored at once
 //    (output_groups.hpp, as the C does), zeros and values packed in a 256-bit register;
+//  - lane pairs (lane_pairs.hpp) are values of two doubles, computed by the packed
+//    forms of the operations; a pair's lane 0 is read as a scalar as it is, lane 1
+//    moved out once (High); two scalars become a pair by one unpack, a duplication, one
+//    16-byte constant, or two adjacent inputs read at once;
 //  - sin and cos of one argument are the kernel of sincos_kernel.h: at the entry in
 //    vector lanes where every argument is an input (EntryKernelInput), else operation
 //    by operation in a region: checked |x| <= 2^19 first, libm's sincos out of line
@@ -31,17 +35,21 @@ inline constexpr std::uint32_t kNoValue = 0xffffffffu;
 struct ValueHome {
   enum class Kind : std::uint8_t { None, Constant, Input, EntryKernel } kind = Kind::None;
   std::uint64_t bits = 0;              // Constant: the double's (or mask's) bits
+  std::uint64_t bits_high = 0;         // Constant: a pair's lane 1 (0 for a scalar)
   std::uint32_t block = 0, index = 0;  // Input; EntryKernel: index = byte offset in the results
 };
 
+// The arithmetic is scalar, or lane by lane where the result is a pair (AsmProgram::pair).
 enum class MCode : std::uint8_t {
-  Add, Sub, Mul, Div,  // dst = a op b (scalar double)
+  Add, Sub, Mul, Div,  // dst = a op b
   Sqrt,       // dst = sqrt(a)
   Fma,        // dst = sign_product * (a * b) + sign_addend * c
   And, Xor,   // 128-bit bitwise: dst = a & b, a ^ b
   AddQ, SubQ, // 64-bit integer lanes: dst = a + b, a - b
   ShlQ,       // dst = a << imm (64-bit lanes)
   Pack2,      // dst = [a, b] (128 bits; a zero upper half)
+  Dup,        // dst = [a, a] (a pair)
+  High,       // dst = a's lane 1 (a scalar of a pair)
   Low,        // dst = [a, 0] (128 bits; a zero upper half)
   Pack4,      // dst = [a's 128 bits, b's 128 bits] (256 bits)
   Store4,     // out[block][index .. index+3] = a's 256 bits (an output group, or the constant 0)
@@ -69,7 +77,8 @@ struct EntryKernelInput {
 
 struct AsmProgram {
   std::vector<MOp> ops;
-  std::vector<bool> wide;  // per value: more than its low 64 bits matter (Pack2, Low, Pack4): never spilled
+  std::vector<bool> wide;  // per value: an output group's 128 or 256 bits (Pack2, Low, Pack4): never spilled
+  std::vector<bool> pair;  // per value: a lane pair's two doubles (spilled to 16 bytes)
   std::vector<EntryKernelInput> entry_kernels;  // the lanes in order; empty: kernels in the body
   std::vector<ValueHome> homes;  // one per value
   std::uint32_t values() const { return static_cast<std::uint32_t>(homes.size()); }

@@ -12,42 +12,6 @@
 
 namespace robodiff::codegen::detail {
 
-std::string AsmConstants::label(std::uint64_t bits) {
-  auto it = index_.emplace(bits, static_cast<int>(index_.size())).first;
-  return ".LRDc" + std::to_string(it->second);
-}
-
-std::string AsmConstants::vector(std::uint64_t bits) {
-  auto it = vector_index_.emplace(bits, static_cast<int>(vector_index_.size())).first;
-  return ".LRDv" + std::to_string(it->second);
-}
-
-namespace {
-
-// A pool's entries in the order of their labels: `copies` quads of each (then zeros to 16 bytes).
-std::string printPool(const std::map<std::uint64_t, int>& index, const char* prefix, int copies) {
-  if (index.empty()) return {};
-  const int bytes = copies == 4 ? 32 : 16;
-  std::ostringstream s;
-  s << "\t.section\t.rodata.cst" << bytes << ",\"aM\",@progbits," << bytes << "\n\t.p2align " << (bytes == 32 ? 5 : 4)
-    << "\n";
-  std::vector<std::pair<int, std::uint64_t>> ordered;
-  for (const auto& [bits, i] : index) ordered.emplace_back(i, bits);
-  std::sort(ordered.begin(), ordered.end());
-  char quad[32];
-  for (const auto& [i, bits] : ordered) {
-    std::snprintf(quad, sizeof quad, "0x%016llx", static_cast<unsigned long long>(bits));
-    s << prefix << i << ":\n\t.quad\t" << quad;
-    for (int c = 1; c < copies; ++c) s << ", " << quad;
-    s << (copies == 1 ? ", 0\n" : "\n");
-  }
-  return s.str();
-}
-
-}  // namespace
-
-std::string AsmConstants::print() const { return printPool(index_, ".LRDc", 1) + printPool(vector_index_, ".LRDv", 4); }
-
 namespace {
 
 constexpr const char* kBlockRegisters[] = {"%rax", "%rcx", "%rdx", "%r8", "%r9", "%r10", "%r11"};
@@ -170,12 +134,14 @@ class FunctionPrinter {
   std::string inputMemory(std::uint32_t block, std::uint32_t index) const {
     return std::to_string(8 * index) + "(" + kBlockRegisters[blocks_.input.at(block)] + ")";
   }
-  std::string memory(std::uint32_t v) {
-    if (slot_[v] >= 0) return std::to_string(kernel_bytes_ + 8 * slot_[v]) + "(%rsp)";
+  // `lane`: a spilled pair's lane 1 (8 bytes on).
+  std::string memory(std::uint32_t v, int lane = 0) {
+    if (slot_[v] >= 0) return std::to_string(kernel_bytes_ + 8 * (slot_[v] + lane)) + "(%rsp)";
+    if (lane != 0) throw std::logic_error("asm: lane 1 of a value with a home");
     const ValueHome& h = p_.homes[v];
     if (h.kind == ValueHome::Kind::Input) return inputMemory(h.block, h.index);
     if (h.kind == ValueHome::Kind::EntryKernel) return std::to_string(h.index) + "(%rsp)";
-    if (h.kind == ValueHome::Kind::Constant) return constants_.label(h.bits) + "(%rip)";
+    if (h.kind == ValueHome::Kind::Constant) return constants_.label(h.bits, h.bits_high) + "(%rip)";
     throw std::logic_error("asm: a value neither in a register nor in memory");
   }
   // The value's register, or its memory operand.
@@ -214,8 +180,8 @@ class FunctionPrinter {
     if (best == kNoRegister) throw std::logic_error("asm: every register is locked");
     const std::uint32_t v = holds_[best];
     if (!hasMemory(v)) {
-      slot_[v] = newSlot();
-      emit("vmovsd\t" + xmm(best) + ", " + memory(v));
+      slot_[v] = newSlot(p_.pair[v]);
+      emit((p_.pair[v] ? "vmovapd\t" : "vmovsd\t") + xmm(best) + ", " + memory(v));
     }
     reg_[v] = kNoRegister;
     holds_[best] = kNoValue;
@@ -240,26 +206,39 @@ class FunctionPrinter {
     if (reg_[v] == kNoRegister) {
       const std::string from = memory(v);
       const int r = takeRegister(at);
-      emit("vmovsd\t" + from + ", " + xmm(r));
-        bind(v, r);
+      emit((p_.pair[v] ? "vmovupd\t" : "vmovsd\t") + from + ", " + xmm(r));
+      bind(v, r);
     }
     locked_[reg_[v]] = true;
     return reg_[v];
   }
 
-  int newSlot() {
-    if (!free_slots_.empty()) {
+  // A stack slot of 8 bytes, or for a pair two at an even slot (16 bytes aligned: the
+  // frame's slots start 16-byte aligned).
+  int newSlot(bool pair) {
+    if (!pair && !free_slots_.empty()) {
       const int s = *free_slots_.begin();
       free_slots_.erase(free_slots_.begin());
       return s;
     }
-    return slots_++;
+    if (pair)
+      for (int s : free_slots_)
+        if (s % 2 == 0 && free_slots_.count(s + 1)) {
+          free_slots_.erase(s);
+          free_slots_.erase(s + 1);
+          return s;
+        }
+    if (!pair) return slots_++;
+    if (slots_ % 2 != 0) free_slots_.insert(slots_++);
+    slots_ += 2;
+    return slots_ - 2;
   }
 
   void release(std::uint32_t v) {
     if (reg_[v] != kNoRegister) holds_[reg_[v]] = kNoValue;
     reg_[v] = kNoRegister;
     if (slot_[v] >= 0) free_slots_.insert(slot_[v]);
+    if (slot_[v] >= 0 && p_.pair[v]) free_slots_.insert(slot_[v] + 1);
     slot_[v] = -1;
   }
 
@@ -293,9 +272,11 @@ class FunctionPrinter {
     for (std::uint32_t v : op.src)
       if (v != kNoValue && reg_[v] != kNoRegister) locked_[reg_[v]] = true;
     switch (op.code) {
-      case MCode::Add: case MCode::Mul: printBinary(op, i, op.code == MCode::Add ? "vaddsd" : "vmulsd", true, false); break;
-      case MCode::Sub: printBinary(op, i, "vsubsd", false, false); break;
-      case MCode::Div: printBinary(op, i, "vdivsd", false, false); break;
+      case MCode::Add: case MCode::Mul:
+        printBinary(op, i, arithmetic(op, op.code == MCode::Add ? "vadd" : "vmul").c_str(), true, false);
+        break;
+      case MCode::Sub: printBinary(op, i, arithmetic(op, "vsub").c_str(), false, false); break;
+      case MCode::Div: printBinary(op, i, arithmetic(op, "vdiv").c_str(), false, false); break;
       case MCode::And: printBinary(op, i, bitwise("vpand", "vpandq").c_str(), true, true); break;
       case MCode::Xor: printBinary(op, i, bitwise("vpxor", "vpxorq").c_str(), true, true); break;
       case MCode::AddQ: printBinary(op, i, "vpaddq", true, true); break;
@@ -314,6 +295,14 @@ class FunctionPrinter {
         bind(op.dst, d);
         break;
       }
+      case MCode::Dup: {
+        const std::string a = where(op.src[0]);
+        const int d = resultRegister(op, i);
+        emit("vmovddup\t" + a + ", " + xmm(d));
+        bind(op.dst, d);
+        break;
+      }
+      case MCode::High: printHigh(op, i); break;
       case MCode::Fma: printFma(op, i); break;
       case MCode::Pack2: case MCode::Low: case MCode::Pack4: printPack(op, i); break;
       case MCode::Store4:
@@ -357,6 +346,26 @@ class FunctionPrinter {
     finish(op, i);
   }
 
+  // The mnemonic of an arithmetic operation: scalar, or packed for a pair's.
+  std::string arithmetic(const MOp& op, const char* stem) const {
+    return std::string(stem) + (p_.pair[op.dst] ? "pd" : "sd");
+  }
+
+  // A pair's lane 1 as a scalar: moved out of its register, or read from its slot.
+  void printHigh(const MOp& op, std::uint32_t i) {
+    const std::uint32_t a = op.src[0];
+    if (reg_[a] == kNoRegister) {
+      const std::string from = memory(a, 1);
+      const int d = resultRegister(op, i);
+      emit("vmovsd\t" + from + ", " + xmm(d));
+      return bind(op.dst, d);
+    }
+    const int ra = inRegister(a, i);
+    const int d = resultRegister(op, i);
+    emit("vpermilpd\t$1, " + xmm(ra) + ", " + xmm(d));
+    bind(op.dst, d);
+  }
+
   std::string output(const MOp& op) const {
     return std::to_string(8 * op.index) + "(" + kBlockRegisters[blocks_.output.at(op.block)] + ")";
   }
@@ -382,6 +391,12 @@ class FunctionPrinter {
   // or two such halves into 256 bits (EVEX's form where a register is beyond 15).
   void printPack(const MOp& op, std::uint32_t i) {
     const int a = inRegister(op.src[0], i);
+    if (op.code == MCode::Pack2 && reg_[op.src[1]] == kNoRegister) {  // lane 1 loaded from memory
+      const std::string from = memory(op.src[1]);
+      const int d = resultRegister(op, i);
+      emit("vmovhpd\t" + from + ", " + xmm(a) + ", " + xmm(d));
+      return bind(op.dst, d);
+    }
     const int b = op.code == MCode::Low ? kNoRegister : inRegister(op.src[1], i);
     const int d = resultRegister(op, i);
     if (op.code == MCode::Pack2) emit("vunpcklpd\t" + xmm(b) + ", " + xmm(a) + ", " + xmm(d));
@@ -397,6 +412,7 @@ class FunctionPrinter {
   void printFma(const MOp& op, std::uint32_t i) {
     std::string name = op.negate_product ? (op.negate_addend ? "vfnmsub" : "vfnmadd")
                                          : (op.negate_addend ? "vfmsub" : "vfmadd");
+    const std::string form231 = p_.pair[op.dst] ? "231pd\t" : "231sd\t", form213 = p_.pair[op.dst] ? "213pd\t" : "213sd\t";
     std::uint32_t a = op.src[0], b = op.src[1];
     const std::uint32_t c = op.src[2];
     if (reg_[a] == kNoRegister && reg_[b] != kNoRegister) std::swap(a, b);
@@ -404,22 +420,22 @@ class FunctionPrinter {
     const bool once = a != c && b != c;  // c read once: its register may take the result
     if (reg_[c] != kNoRegister && diesAt(c, i) && once) {
       const int d = reg_[c];
-      emit(name + "231sd\t" + where(b) + ", " + xmm(ra) + ", " + xmm(d));
+      emit(name + form231 + where(b) + ", " + xmm(ra) + ", " + xmm(d));
       return moveResult(c, op.dst, d);
     }
     if (diesAt(a, i) && a != c) {
       const int rb = inRegister(b, i);
-      emit(name + "213sd\t" + where(c) + ", " + xmm(rb) + ", " + xmm(ra));
+      emit(name + form213 + where(c) + ", " + xmm(rb) + ", " + xmm(ra));
       return moveResult(a, op.dst, ra);
     }
     if (reg_[b] != kNoRegister && diesAt(b, i) && b != c && b != a) {
-      emit(name + "213sd\t" + where(c) + ", " + xmm(ra) + ", " + xmm(reg_[b]));
+      emit(name + form213 + where(c) + ", " + xmm(ra) + ", " + xmm(reg_[b]));
       return moveResult(b, op.dst, reg_[b]);
     }
     const int d = takeRegister(i);
     const std::string from = where(c);
-    emit((from[0] == '%' ? "vmovapd\t" : "vmovsd\t") + from + ", " + xmm(d));
-    emit(name + "231sd\t" + where(b) + ", " + xmm(ra) + ", " + xmm(d));
+    emit((from[0] == '%' ? "vmovapd\t" : p_.pair[c] ? "vmovupd\t" : "vmovsd\t") + from + ", " + xmm(d));
+    emit(name + form231 + where(b) + ", " + xmm(ra) + ", " + xmm(d));
     bind(op.dst, d);
   }
   void moveResult(std::uint32_t dying, std::uint32_t result, int r) {
@@ -459,19 +475,19 @@ class FunctionPrinter {
 
   // The frame: entry kernels' results, spill slots, then the cold paths' save areas.
   int xmmSave() const { return kernel_bytes_ + 8 * slots_; }
-  int gprSave() const { return xmmSave() + 8 * static_cast<int>(holds_.size()); }
+  int gprSave() const { return xmmSave() + 16 * static_cast<int>(holds_.size()); }
   int callResults() const { return gprSave() + 8 * kBlockRegisterCount; }
 
   std::string coldPath(const ColdPath& c) const {
     const int save = xmmSave(), gpr_save = gprSave(), result = callResults();
     std::ostringstream s;
     s << ".L" << label_ << "_cold" << c.label << ":\n\tvzeroupper\n";
-    for (int r : c.saved) s << "\tvmovsd\t" << xmm(r) << ", " << save + 8 * r << "(%rsp)\n";
+    for (int r : c.saved) s << "\tvmovupd\t" << xmm(r) << ", " << save + 16 * r << "(%rsp)\n";
     for (int g = 0; g < blocks_.count(); ++g) s << "\tmov\t" << kBlockRegisters[g] << ", " << gpr_save + 8 * g << "(%rsp)\n";
     if (c.x != 0) s << "\tvmovapd\t" << xmm(c.x) << ", %xmm0\n";
     s << "\tlea\t" << result << "(%rsp), %rdi\n\tlea\t" << result + 8 << "(%rsp), %rsi\n\tcall\tsincos@PLT\n";
     for (int g = 0; g < blocks_.count(); ++g) s << "\tmov\t" << gpr_save + 8 * g << "(%rsp), " << kBlockRegisters[g] << "\n";
-    for (int r : c.saved) s << "\tvmovsd\t" << save + 8 * r << "(%rsp), " << xmm(r) << "\n";
+    for (int r : c.saved) s << "\tvmovupd\t" << save + 16 * r << "(%rsp), " << xmm(r) << "\n";
     s << "\tvmovsd\t" << result << "(%rsp), " << xmm(c.sin) << "\n\tvmovsd\t" << result + 8 << "(%rsp), " << xmm(c.cos)
       << "\n\tjmp\t.L" << label_ << "_join" << c.label << "\n";
     return s.str();

@@ -15,9 +15,9 @@
 #pragma once
 
 #include <cstdint>
-#include <map>
 #include <string>
 
+#include "asm_constants.hpp"
 #include "asm_program.hpp"
 
 namespace robodiff::codegen::detail {
@@ -26,18 +26,6 @@ namespace robodiff::codegen::detail {
 // FMA, 32 with AVX-512 (F and VL: the EVEX forms of the bitwise operations).
 struct AsmTarget {
   int xmm_registers = 16;
-};
-
-// The library's constants: 16-byte entries (the bitwise operations read 128 bits), one
-// per distinct bit pattern, printed once after every function.
-class AsmConstants {
- public:
-  std::string label(std::uint64_t bits);
-  std::string vector(std::uint64_t bits);  // 32 bytes: four copies (256-bit operands)
-  std::string print() const;
-
- private:
-  std::map<std::uint64_t, int> index_, vector_index_;
 };
 
 // The function `symbol` (local to the library) computing `program`. Throws

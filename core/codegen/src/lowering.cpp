@@ -365,7 +365,7 @@ class Lowerer {
   // arguments can be read now (an input, or a value of this chunk already computed).
   // The kernel is ~35 instructions whatever the lanes.
   template <class It> It laterSinCos(It it, It end) const {
-    if (options_.lane_pairs != LanePairMode::Emit) return end;
+    if (options_.lane_pairs != LanePairMode::Emit || !options_.sincos_lanes) return end;
     for (It later = it + 1; later != end; ++later) {
       if (later->second == kNone || later->lane1 != kNone || computed_early_[later->first]) continue;
       const Ref x = resolve(g_, g_.node(later->first).args[0]);

@@ -139,6 +139,10 @@ struct LoweringOptions {
   LanePairMode lane_pairs = LanePairMode::Off;
   bool ready_first_sums = false;  // sum chains take their terms in order of readiness (sum_chains.hpp)
   LanePairMemo* lane_pair_memo = nullptr;  // shared by one function's lowerings; not owned
+  // With lane pairs, sin and cos of two to four arguments in the lanes of one kernel
+  // (SinCosPair, SinCosQuad); false: each its own SinCos (the assembly's kernels take
+  // four input arguments at once by themselves).
+  bool sincos_lanes = true;
 };
 
 // Expects a definition that passed validate(graph).

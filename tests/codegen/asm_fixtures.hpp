@@ -1,0 +1,38 @@
+// Helpers shared by the assembly back end's tests (asm_*_test.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "asm_emitter.hpp"
+#include "codegen_fixtures.hpp"
+#include "robodiff/codegen/loaded_library.hpp"
+
+namespace robodiff::codegen::testing {
+
+// The targets this host runs: 16 registers wherever the back end applies, 32 with AVX-512.
+std::vector<detail::AsmTarget> hostTargets();
+
+#define SKIP_WITHOUT_ASSEMBLY()                                                          \
+  if (::robodiff::codegen::testing::hostTargets().empty())                               \
+  GTEST_SKIP() << "the assembly back end needs x86-64 with AVX2 and FMA"
+
+// Without lane pairs: functions C would compute in pairs (the fixtures' rotation
+// entries, column by column) are assembled as scalars.
+CodegenOptions withoutPairs();
+
+// The functions as assembly with `options` (throws where the back end declines them).
+GeneratedLibrary assembly(const Graph& g, const std::vector<FunctionDefinition>& fs, const detail::AsmTarget& target,
+                          const CodegenOptions& options = withoutPairs());
+
+LoadedLibrary compiled(const GeneratedLibrary& lib, const TempDir& dir, const std::string& name);
+
+// Within `tolerance` relative to the value or 1, whichever is larger (values near zero
+// come from cancellation); NaN where the other is NaN.
+bool closeScaled(double got, double want, double tolerance);
+
+// Every output of `fn` at `in` within `tolerance` (closeScaled) of the graph's own evaluation.
+void expectGraphValuesAt(const Graph& g, const FunctionDefinition& f, const CompiledFunction& fn,
+                         const std::vector<std::vector<double>>& in, double tolerance, const std::string& what);
+
+}  // namespace robodiff::codegen::testing

@@ -1,0 +1,124 @@
+// Lane pairs in the assembly (asm_program.hpp): a twin-limbed function's pairs computed
+// by packed instructions compute what the graph computes, with 16 and 32 registers:
+// pairs packed from constants, adjacent inputs, one value and two scalars; negated pair
+// operands (signs of packed multiply-adds); lanes read back as scalars from registers and from spill slots; pairs live
+// across a sin-cos region whose argument goes through libm.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <regex>
+#include <string>
+
+#include "asm_fixtures.hpp"
+#include "lowering.hpp"
+
+namespace robodiff::codegen {
+namespace {
+
+using namespace testing;
+
+// One limb of twinLimbs: the same operations for either side (the generator seeded
+// alike), its inputs 2k + side (the two limbs' inputs adjacent), its constants scaled by
+// side, input 8 read by both.
+std::vector<NodeId> randomLimb(Graph& g, std::uint32_t seed, int operations, std::uint32_t side) {
+  std::mt19937 rng(seed);
+  std::vector<NodeId> pool;
+  for (std::uint32_t k = 0; k < 4; ++k) pool.push_back(g.input(2 * k + side));
+  pool.push_back(g.input(8));
+  const double scale = 1.0 + 0.5 * side;
+  auto c = [&](double x) { return g.constant(x * scale); };
+  auto pick = [&] {
+    const std::size_t n = pool.size();
+    const std::size_t back = rng() % 4 == 0 ? rng() % n : rng() % std::min<std::size_t>(n, 6);
+    return pool[n - 1 - back];
+  };
+  auto bounded = [&](NodeId v) { return g.binary(Op::Div, v, g.binary(Op::Add, g.one(), g.unary(Op::Abs, v))); };
+  for (int k = 0; k < operations; ++k) {
+    const NodeId a = pick(), b = pick();
+    NodeId v;
+    switch (rng() % 10) {
+      case 0: v = g.binary(Op::Add, a, g.unary(Op::Neg, b)); break;
+      case 1: v = g.binary(Op::Sub, g.binary(Op::Mul, a, b), c(0.25 * (k % 7))); break;
+      case 2: v = g.binary(Op::Mul, g.unary(Op::Neg, a), b); break;
+      case 3: v = g.binary(Op::Div, a, g.binary(Op::Add, c(1.5), g.unary(Op::Abs, b))); break;
+      case 4: v = g.unary(Op::Sqrt, g.binary(Op::Add, g.one(), g.binary(Op::Mul, a, a))); break;
+      case 5: v = g.binary(Op::Mul, g.unary(Op::Sin, g.input(2 * (rng() % 4) + side)), a); break;
+      case 6: v = g.unary(Op::Cos, g.binary(Op::Add, a, b)); break;
+      case 7: v = g.binary(Op::Add, g.binary(Op::Mul, a, b), g.binary(Op::Mul, pick(), g.unary(Op::Neg, pick()))); break;
+      case 8: v = g.unary(Op::Neg, g.binary(Op::Mul, a, b)); break;
+      default: v = g.binary(Op::Sub, c(-0.5), g.binary(Op::Mul, a, c(3.0))); break;
+    }
+    pool.push_back(bounded(v));
+  }
+  return pool;
+}
+
+// Two limbs of the same random shape: outputs each limb's value beside its twin's
+// (lane 0 and lane 1 stored), and products of one limb's values and the other's
+// (both lanes read as scalars).
+FunctionDefinition twinLimbs(Graph& g, std::uint32_t seed, int operations) {
+  const std::vector<NodeId> left = randomLimb(g, seed, operations, 0), right = randomLimb(g, seed, operations, 1);
+  std::mt19937 rng(seed + 1000);
+  std::vector<NodeId> values;
+  for (int e = 0; e < 12; ++e) {
+    const std::size_t i = left.size() - 1 - rng() % std::min<std::size_t>(left.size(), 40);
+    values.push_back(left[i]);
+    values.push_back(right[i]);
+  }
+  for (int e = 0; e < 4; ++e)
+    values.push_back(g.binary(Op::Mul, left[left.size() - 1 - rng() % 30], right[right.size() - 1 - rng() % 30]));
+  return FunctionDefinition{"twins" + std::to_string(seed), {{"x", 9}}, {OutputBlock::dense("y", 7, 4, values)}};
+}
+
+TEST(AsmLanePairs, ATwinLimbedFunctionIsAssembledWithItsPairs) {
+  SKIP_WITHOUT_ASSEMBLY();
+  for (const detail::AsmTarget& target : hostTargets()) {
+    Graph g;
+    const FunctionDefinition f = twoLimbsFunction(g);  // C computes its twins in lane pairs
+    const GeneratedLibrary lib = assembly(g, {f}, target, CodegenOptions{});
+    ASSERT_EQ(lib.sources[0].path, "library.s");
+    EXPECT_GT(lib.functions[0].lane_pairs, 0u);
+    EXPECT_NE(lib.sources[0].text.find("vdivpd\t"), std::string::npos) << "the limbs' divisions two at a time";
+    expectCompiledAsTheGraph(g, f, lib, 1e-13);
+  }
+  // Through generateLibrary, as a single-knot library asking for assembly.
+  Graph g;
+  CodegenOptions options;
+  options.batch_width = 1;
+  options.assembly = true;
+  EXPECT_EQ(generateLibrary(g, {twoLimbsFunction(g)}, options).sources[0].path, "library.s");
+}
+
+// Each seed's function, its inputs random and, at one point, an input beyond the
+// kernel's range (libm's sincos called with pairs live); over the seeds, every way a
+// pair is made and read back appears.
+TEST(AsmLanePairs, RandomTwinLimbsComputeWhatTheGraphComputes) {
+  SKIP_WITHOUT_ASSEMBLY();
+  // Printed: one value in both lanes, lane 1 moved out, two scalars packed (lane 1 from
+  // memory), a pair spilled, packed multiply-adds, two adjacent inputs read as a pair.
+  const char* features[] = {"vmovddup\t", "vpermilpd\t$1, %xmm", "vmovhpd\t", "vmovapd\t%xmm", "vfmadd231pd\t%xmm",
+                            "vfnmadd231pd\t", "pd\t(%rax), %xmm"};
+  std::vector<bool> seen(std::size(features), false);
+  for (const detail::AsmTarget& target : hostTargets())
+    for (std::uint32_t seed = 1; seed <= 10; ++seed) {
+      Graph g;
+      const FunctionDefinition f = twinLimbs(g, seed, 30 + 25 * static_cast<int>(seed));
+      const GeneratedLibrary lib = assembly(g, {f}, target, CodegenOptions{});
+      const std::string what = std::to_string(target.xmm_registers) + " registers, seed " + std::to_string(seed);
+      EXPECT_GT(lib.functions[0].lane_pairs, 0u) << what;
+      const std::string text = std::regex_replace(lib.sources[0].text, std::regex("\t-?[0-9]+\\(%rax\\)"), "\t(%rax)");
+      for (std::size_t k = 0; k < std::size(features); ++k)
+        seen[k] = seen[k] || text.find(features[k]) != std::string::npos;
+      TempDir dir;
+      const LoadedLibrary loaded = compiled(lib, dir, f.name);
+      for (std::uint32_t point = 1; point <= 3; ++point) {
+        auto in = randomInputs(f, 1, point);
+        if (point == 3) in[0][seed % 8] = 3.0e6;
+        expectGraphValuesAt(g, f, loaded.function(f.name), in, 1e-12, what + ", point " + std::to_string(point));
+      }
+    }
+  for (std::size_t k = 0; k < std::size(features); ++k) EXPECT_TRUE(seen[k]) << "never printed: " << features[k];
+}
+
+}  // namespace
+}  // namespace robodiff::codegen
