@@ -22,7 +22,7 @@ namespace robodiff::codegen::detail {
 // quadruped's RNEA), those of 5,399-8,228 15-30% slower (the quadruped's ABA value, the
 // Panda's RNEA and ABA Jacobians, its Euler step with Jacobians). docs/code-generation.md,
 // "The assembly back end".
-inline constexpr std::uint32_t kAssemblyBelow = 3000;
+inline constexpr std::uint32_t kAssemblyBelow = 4000;
 
 // The host's target for the assembly, or nullopt where it does not apply (not x86-64,
 // or no AVX2 and FMA).
