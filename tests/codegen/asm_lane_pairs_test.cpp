@@ -1,15 +1,21 @@
 // Lane pairs in the assembly (asm_program.hpp): a twin-limbed function's pairs computed
 // by packed instructions compute what the graph computes, with 16 and 32 registers:
 // pairs packed from constants, adjacent inputs, one value and two scalars; negated pair
-// operands (signs of packed multiply-adds); lanes read back as scalars from registers and from spill slots; pairs live
-// across a sin-cos region whose argument goes through libm.
+// operands (signs of packed multiply-adds); lanes read back as scalars from registers
+// and from spill slots; pairs live across a sin-cos region whose argument goes through
+// libm; twin kernels at the entry in neighbouring lanes, their results read as pairs
+// from the frame.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <random>
 #include <regex>
 #include <string>
 
+#include "asm_entry_kernels.hpp"
 #include "asm_fixtures.hpp"
+#include "lane_pairs.hpp"
 #include "lowering.hpp"
 
 namespace robodiff::codegen {
@@ -68,6 +74,68 @@ FunctionDefinition twinLimbs(Graph& g, std::uint32_t seed, int operations) {
   for (int e = 0; e < 4; ++e)
     values.push_back(g.binary(Op::Mul, left[left.size() - 1 - rng() % 30], right[right.size() - 1 - rng() % 30]));
   return FunctionDefinition{"twins" + std::to_string(seed), {{"x", 9}}, {OutputBlock::dense("y", 7, 4, values)}};
+}
+
+// Two planar chains of `joints` links, the left one's angles inputs 0..joints-1, the
+// right one's joints..2 joints-1 (twins far apart in the inputs), their lengths apart:
+// each link's end point and direction, left beside right. Sin-cos of inputs only: the
+// kernels run at the entry.
+FunctionDefinition twinChains(Graph& g, std::uint32_t joints) {
+  std::vector<NodeId> values;
+  std::vector<NodeId> c(2, g.one()), s(2, g.zero()), x(2, g.zero()), y(2, g.zero());
+  auto mul = [&](NodeId a, NodeId b) { return g.binary(Op::Mul, a, b); };
+  for (std::uint32_t j = 0; j < joints; ++j)
+    for (std::uint32_t side = 0; side < 2; ++side) {
+      const NodeId q = g.input(side * joints + j), cq = g.unary(Op::Cos, q), sq = g.unary(Op::Sin, q);
+      const NodeId c2 = g.binary(Op::Sub, mul(c[side], cq), mul(s[side], sq));
+      s[side] = g.binary(Op::Add, mul(s[side], cq), mul(c[side], sq));
+      c[side] = c2;
+      const NodeId length = g.constant(0.3 + 0.1 * j + 0.05 * side);
+      x[side] = g.binary(Op::Add, x[side], mul(length, c[side]));
+      y[side] = g.binary(Op::Add, y[side], mul(length, s[side]));
+      values.insert(values.end(), {x[side], y[side], c[side]});
+    }
+  return FunctionDefinition{"chains", {{"q", 2 * joints}}, {OutputBlock::dense("p", 6 * joints, 1, values)}};
+}
+
+// Twin joints' kernels take neighbouring lanes, so that a pair of their sines (or
+// cosines) is read from the frame as it is; the values are the graph's, every argument
+// within the kernels' range or beyond it (libm, lane by lane, writing the frame).
+TEST(AsmLanePairs, TwinKernelsAtTheEntryTakeNeighbouringLanes) {
+  SKIP_WITHOUT_ASSEMBLY();
+  constexpr std::uint32_t joints = 5;
+  Graph g;
+  const FunctionDefinition f = twinChains(g, joints);
+  detail::FunctionPairing pairing = detail::pairingOf(g, f);
+  ASSERT_FALSE(pairing.ready_first_sums) << "the chains are computed in lane pairs";
+  detail::LoweringOptions lo;
+  lo.lane_pairs = detail::LanePairMode::Emit;
+  lo.sincos_lanes = false;
+  lo.lane_pair_memo = &pairing.memo;
+  const detail::LoweredFunction lowered = detail::lower(g, f, lo);
+  const auto lanes = detail::entryKernelLanes(lowered.chunks.at(0));
+  ASSERT_TRUE(lanes.has_value());
+  ASSERT_EQ(lanes->size(), 2 * joints);
+  for (std::uint32_t k = 0; k < joints; ++k) {
+    const std::uint32_t a = (*lanes)[2 * k].index, b = (*lanes)[2 * k + 1].index;
+    EXPECT_EQ(std::min(a, b), k) << "lanes " << 2 * k << " and " << 2 * k + 1;
+    EXPECT_EQ(std::max(a, b), joints + k) << "lanes " << 2 * k << " and " << 2 * k + 1;
+  }
+  const double specials[] = {6.0e5, -1.0e300, std::numeric_limits<double>::infinity()};
+  for (const detail::AsmTarget& target : hostTargets()) {
+    const GeneratedLibrary lib = assembly(g, {f}, target, CodegenOptions{});
+    EXPECT_GT(lib.functions[0].lane_pairs, 0u);
+    TempDir dir;
+    const LoadedLibrary loaded = compiled(lib, dir, "chains");
+    for (std::uint32_t position = 0; position < 2 * joints; ++position)
+      for (double special : specials) {
+        auto in = randomInputs(f, 1, 3 + position);
+        expectGraphValuesAt(g, f, loaded.function("chains"), in, 1e-13, "within the range");
+        in[0][position] = special;
+        expectGraphValuesAt(g, f, loaded.function("chains"), in, 1e-13,
+                            "input " + std::to_string(position) + " = " + std::to_string(special));
+      }
+  }
 }
 
 TEST(AsmLanePairs, ATwinLimbedFunctionIsAssembledWithItsPairs) {

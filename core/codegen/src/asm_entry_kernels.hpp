@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,12 @@ struct EntryKernelFrame {
   int results = 0;   // byte offset of the results (64 bytes a group of four lanes)
   int gpr_save = 0;  // where the cold paths save the blocks' registers
 };
+
+// The kernels' lanes, where every sin-cos argument of the function is an input read as
+// it is; nullopt otherwise. Twin arguments (whose sines, or cosines, a lane pair reads
+// together) take lanes 2k and 2k + 1, so that their results are one 16-byte pair in the
+// frame; the others follow in the inputs' order.
+std::optional<std::vector<EntryKernelInput>> entryKernelLanes(const Chunk& chunk);
 
 inline int entryKernelBytes(std::size_t lanes) { return static_cast<int>(64 * ((lanes + 3) / 4)); }
 

@@ -9,6 +9,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "asm_entry_kernels.hpp"
 #include "output_groups.hpp"
 #include "robodiff/codegen/sincos_kernel.h"
 
@@ -74,31 +75,14 @@ class Builder {
 
   // The kernels' lanes at entry, when every sin-cos argument is an input read as it is.
   void planEntryKernels() {
-    std::unordered_map<std::uint32_t, EntryKernelInput> loaded;  // slot -> input, as last defined
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> arguments;
-    for (const Instr& ins : chunk_.code) {
-      if (isKernel(ins)) {
-        const Operand& x = ins.args[0];
-        auto it = x.kind == Operand::Kind::Slot && !x.negated ? loaded.find(x.slot) : loaded.end();
-        if (it == loaded.end()) return;
-        arguments.emplace_back(it->second.block, it->second.index);
-      }
-      if (ins.kind == InstrKind::LoadInput) loaded[ins.dst] = {ins.block, ins.index};
-      else if (ins.kind == InstrKind::Compute) loaded.erase(ins.dst);
-      else if (ins.kind == InstrKind::SinCos) loaded.erase(ins.dst), loaded.erase(ins.dst2);
-    }
-    std::sort(arguments.begin(), arguments.end());
-    arguments.erase(std::unique(arguments.begin(), arguments.end()), arguments.end());
-    for (std::size_t lane = 0; lane < arguments.size(); ++lane) {
-      program_.entry_kernels.push_back({arguments[lane].first, arguments[lane].second});
-      lane_of_[arguments[lane]] = static_cast<std::uint32_t>(lane);
+    std::optional<std::vector<EntryKernelInput>> lanes = entryKernelLanes(chunk_);
+    if (!lanes) return;
+    program_.entry_kernels = std::move(*lanes);
+    for (std::size_t lane = 0; lane < program_.entry_kernels.size(); ++lane) {
+      const EntryKernelInput& x = program_.entry_kernels[lane];
+      lane_of_[{x.block, x.index}] = static_cast<std::uint32_t>(lane);
     }
     kernels_at_entry_ = true;
-  }
-
-  static bool isKernel(const Instr& ins) {
-    return ins.kind == InstrKind::SinCos ||
-           (ins.kind == InstrKind::Compute && (ins.op == Op::Sin || ins.op == Op::Cos));
   }
 
   // A local's key: scalar slots and pair slots are numbered apart.
@@ -242,7 +226,8 @@ class Builder {
   }
 
   // The pair [x, y] of two scalar operands: two constants one 16-byte constant, two
-  // adjacent inputs read at once, one value duplicated, else one unpack.
+  // adjacent inputs or twin kernels' results read at once, one value duplicated, else
+  // one unpack.
   std::uint32_t pack(const Operand& x, const Operand& y) {
     const Signed a = operand(x), b = operand(y);
     const ValueHome ha = program_.homes[a.value], hb = program_.homes[b.value];
@@ -251,15 +236,20 @@ class Builder {
     if (ha.kind == ValueHome::Kind::Input && hb.kind == ValueHome::Kind::Input && ha.block == hb.block &&
         hb.index == ha.index + 1 && !a.negated && !b.negated)
       return newValue(ha, true);
+    if (ha.kind == ValueHome::Kind::EntryKernel && hb.kind == ValueHome::Kind::EntryKernel &&
+        hb.index == ha.index + 8 && ha.index % 16 == 0 && !a.negated && !b.negated)
+      return newValue(ha, true);  // twin kernels' results, side by side in the frame
+    const auto key = std::make_tuple(a.value, a.negated, b.value, b.negated);
+    if (auto it = packs_.find(key); it != packs_.end()) return it->second;  // packed before: read again
+    std::uint32_t d;
     if (a.value == b.value && a.negated == b.negated) {
-      const std::uint32_t d = emit(MCode::Dup, plain(x));
-      program_.pair[d] = true;
-      return d;
+      d = emit(MCode::Dup, plain(x));
+    } else {
+      const std::uint32_t pa = plain(x), pb = plain(y);
+      d = emit(MCode::Pack2, pa, pb);
     }
-    const std::uint32_t pa = plain(x), pb = plain(y);
-    const std::uint32_t d = emit(MCode::Pack2, pa, pb);
     program_.pair[d] = true;
-    return d;
+    return packs_[key] = d;
   }
 
   void emitInstr(const Instr& ins, std::size_t i) {
@@ -496,6 +486,7 @@ class Builder {
   std::unordered_map<std::uint64_t, std::pair<Signed, Signed>> products_;  // fused product's local -> factors
   bool packed_ = false;  // a lane pair's operation is being built
   std::unordered_map<std::uint32_t, std::uint32_t> high_of_;  // pair -> its lane 1
+  std::map<std::tuple<std::uint32_t, bool, std::uint32_t, bool>, std::uint32_t> packs_;  // two signed scalars -> their pair
   std::map<std::tuple<std::uint64_t, std::uint64_t, bool>, std::uint32_t> constants_;  // (bits, high, pair) -> value
   bool kernels_at_entry_ = false;  // the kernels run at entry
   OutputGroupPlan groups_;
