@@ -14,6 +14,9 @@ class AsmConstants {
   // 16 bytes: the double (or mask) in the low lane, `high` in lane 1 (a lane pair's
   // constant; 0 for a scalar's). Bitwise operations and packed ones read all 16.
   std::string label(std::uint64_t bits, std::uint64_t high = 0);
+  // The entry's byte offset from the pool's start, .LRDc0 (entries in the order of
+  // their first use, 16 bytes apart).
+  int offset(std::uint64_t bits, std::uint64_t high = 0);
   std::string vector(std::uint64_t bits);  // 32 bytes: four copies (256-bit operands)
   std::string print() const;
 

@@ -17,12 +17,11 @@
 namespace robodiff::codegen::detail {
 
 // Functions of this many instructions (operations less lane pairs) or more are C.
-// Measured without lane pairs (direct calls): value rows
-// of 463-2,662 operations ran 0-12% faster as assembly (the Panda's, arm7's, the
-// quadruped's RNEA), those of 5,399-8,228 15-30% slower (the quadruped's ABA value, the
-// Panda's RNEA and ABA Jacobians, its Euler step with Jacobians). docs/code-generation.md,
-// "The assembly back end".
-inline constexpr std::uint32_t kAssemblyBelow = 4000;
+// Measured (direct calls, the median of 5 processes): up to 17,987 instructions the
+// assembly ran 1-10% faster than C (Solo-12's ABA + J, RNEA + J; the Panda's ABA + J,
+// Euler step + J; Talos's ABA and Euler step values); from 26,880 1-4% slower (Talos's
+// RNEA + J and ABA + J, the free-flying Talos's RNEA + J). docs/assembly-backend.md.
+inline constexpr std::uint32_t kAssemblyBelow = 20000;
 
 // The host's target for the assembly, or nullopt where it does not apply (not x86-64,
 // or no AVX2 and FMA).

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "asm_addressing.hpp"
 #include "asm_entry_kernels.hpp"
 
 namespace robodiff::codegen::detail {
@@ -71,18 +72,27 @@ class FunctionPrinter {
     kernel_bytes_ = p_.entry_kernels.empty() ? 0 : entryKernelBytes(p_.entry_kernels.size());
     const std::string kept = keepLastKernelGroup();
     for (std::uint32_t i = 0; i < p_.ops.size(); ++i) printOp(i);
-    const int frame = frameBytes();
+    const std::string body = kept + body_.str();
+    const BaseBiases bases = chooseBiases(body);
+    const int pushes = (bases.frame ? 1 : 0) + (bases.pool ? 1 : 0);
+    const int frame = frameBytes(pushes);
     std::vector<std::string> block_registers(kBlockRegisters, kBlockRegisters + blocks_.count());
     const EntryKernelCode kernels = printEntryKernels(
         symbol, p_.entry_kernels, [&](std::uint32_t b, std::uint32_t i) { return inputMemory(b, i); }, block_registers,
         EntryKernelFrame{0, gprSave()}, constants_);
     std::ostringstream s;
     s << "\t.text\n\t.p2align 4\n\t.type\t" << symbol << ", @function\n" << symbol << ":\n";
+    if (bases.frame) s << "\tpush\t%rbp\n";
+    if (bases.pool) s << "\tpush\t%rbx\n";
     if (frame > 0) s << "\tsub\t$" << frame << ", %rsp\n";
+    if (bases.frame) s << "\tlea\t" << *bases.frame << "(%rsp), %rbp\n";
+    if (bases.pool) s << "\tlea\t.LRDc0+" << *bases.pool << "(%rip), %rbx\n";
     for (const auto& [block, r] : blocks_.input) s << "\tmov\t" << 8 * block << "(%rdi), " << kBlockRegisters[r] << "\n";
     for (const auto& [block, r] : blocks_.output) s << "\tmov\t" << 8 * block << "(%rsi), " << kBlockRegisters[r] << "\n";
-    s << kernels.hot << kept << body_.str();
+    s << kernels.hot << resolveOperands(body, bases);
     if (frame > 0) s << "\tadd\t$" << frame << ", %rsp\n";
+    if (bases.pool) s << "\tpop\t%rbx\n";
+    if (bases.frame) s << "\tpop\t%rbp\n";
     if (upper_dirty_) s << "\tvzeroupper\n";  // no penalty for the caller's SSE code
     s << "\tret\n";
     for (const ColdPath& c : cold_) s << coldPath(c);
@@ -136,12 +146,12 @@ class FunctionPrinter {
   }
   // `lane`: a spilled pair's lane 1 (8 bytes on).
   std::string memory(std::uint32_t v, int lane = 0) {
-    if (slot_[v] >= 0) return std::to_string(kernel_bytes_ + 8 * (slot_[v] + lane)) + "(%rsp)";
+    if (slot_[v] >= 0) return frameOperand(kernel_bytes_ + 8 * (slot_[v] + lane));
     if (lane != 0) throw std::logic_error("asm: lane 1 of a value with a home");
     const ValueHome& h = p_.homes[v];
     if (h.kind == ValueHome::Kind::Input) return inputMemory(h.block, h.index);
-    if (h.kind == ValueHome::Kind::EntryKernel) return std::to_string(h.index) + "(%rsp)";
-    if (h.kind == ValueHome::Kind::Constant) return constants_.label(h.bits, h.bits_high) + "(%rip)";
+    if (h.kind == ValueHome::Kind::EntryKernel) return frameOperand(static_cast<int>(h.index));
+    if (h.kind == ValueHome::Kind::Constant) return poolOperand(constants_.offset(h.bits, h.bits_high));
     throw std::logic_error("asm: a value neither in a register nor in memory");
   }
   // The value's register, or its memory operand.
@@ -493,13 +503,15 @@ class FunctionPrinter {
     return s.str();
   }
 
-  // Spill slots, and where there is a cold path its save area; a multiple of 16 plus 8,
-  // so that calls from the cold paths see a 16-byte aligned stack.
-  int frameBytes() const {
+  // Spill slots, and where there is a cold path its save area; with the return address
+  // and the `pushes` bases saved, a multiple of 16, so that the frame is 16-byte aligned
+  // (pairs' slots) and calls from the cold paths see an aligned stack.
+  int frameBytes(int pushes) const {
     int bytes = xmmSave();
     if (!cold_.empty() || kernel_bytes_ > 0) bytes = callResults() + 16;
     if (bytes == 0) return 0;
-    return (bytes + 8 + 15) / 16 * 16 - 8;
+    const int saved = 8 + 8 * pushes;
+    return (bytes + saved + 15) / 16 * 16 - saved;
   }
 
   const AsmProgram& p_;
