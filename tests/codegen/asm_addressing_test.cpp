@@ -1,5 +1,6 @@
 // The assembly's base-relative operands (asm_addressing.hpp): every token becomes its
-// offset less its base's bias, on %rbp (frame) or %rbx (pool); the biases put the reads
+// offset less its base's bias, on %rbp (frame) or %rbx (pool), or without a base its
+// offset from %rsp or the pool's label; the biases put the reads
 // within one-byte displacements where one bias can (VEX: [-128, 127]; EVEX: scaled by
 // the operand's size).
 #include <gtest/gtest.h>
@@ -31,7 +32,12 @@ TEST(AsmAddressing, TokensBecomeOffsetsFromTheirBases) {
   const std::string resolved = resolveOperands(text, biases);
   EXPECT_EQ(resolved, "\tvmulsd\t-60(%rbp), %xmm1, %xmm2\n\tvaddsd\t16(%rbx), %xmm2, %xmm3\n\tvmovsd\t%xmm3, 1100(%rbp)\n");
   EXPECT_EQ(resolveOperands("\tvaddsd\t%xmm1, %xmm2, %xmm3\n", {}), "\tvaddsd\t%xmm1, %xmm2, %xmm3\n");
-  EXPECT_THROW(resolveOperands(text, BaseBiases{100, std::nullopt}), std::logic_error) << "a pool read, no pool base";
+  EXPECT_EQ(resolveOperands(text, BaseBiases{100, std::nullopt}),
+            "\tvmulsd\t-60(%rbp), %xmm1, %xmm2\n\tvaddsd\t.LRDc0+32(%rip), %xmm2, %xmm3\n\tvmovsd\t%xmm3, 1100(%rbp)\n")
+      << "no pool base: RIP-relative";
+  EXPECT_EQ(resolveOperands(text, BaseBiases{}),
+            "\tvmulsd\t40(%rsp), %xmm1, %xmm2\n\tvaddsd\t.LRDc0+32(%rip), %xmm2, %xmm3\n\tvmovsd\t%xmm3, 1200(%rsp)\n")
+      << "no bases";
   EXPECT_THROW(resolveOperands("\tvmovsd\t@F8, %xmm0\n", biases), std::logic_error) << "an unterminated token";
 }
 

@@ -192,7 +192,25 @@ TEST(AsmBackend, ValuesBeyondTheRegistersAreSpilledAndReadBack) {
     const FunctionDefinition f = manyLiveValues(g, 120);
     const GeneratedLibrary lib = assembly(g, {f}, target);
     EXPECT_NE(lib.sources[0].text.find("(%rsp)\n"), std::string::npos) << "spill slots";
+    EXPECT_EQ(lib.sources[0].text.find("(%rbp), %xmm"), std::string::npos) << "a small function: no frame base";
     expectCompiledAsTheGraph(g, f, lib, 1e-14);
+  }
+}
+
+// A large function reads its frame through %rbp and its constants through %rbx
+// (asm_addressing.hpp), several bytes apart in both: the values are still the graph's.
+TEST(AsmBackend, ALargeFunctionReadsItsFrameAndConstantsThroughBaseRegisters) {
+  SKIP_WITHOUT_ASSEMBLY();
+  for (const detail::AsmTarget& target : hostTargets()) {
+    Graph g;
+    const FunctionDefinition f = manyLiveValues(g, 1200);
+    const GeneratedLibrary lib = assembly(g, {f}, target);
+    const std::string& text = lib.sources[0].text;
+    EXPECT_NE(text.find("\tpush\t%rbp\n\tpush\t%rbx\n"), std::string::npos);
+    EXPECT_NE(text.find("(%rbp), %xmm"), std::string::npos) << "spilled values read back";
+    EXPECT_NE(text.find("(%rbx), %xmm"), std::string::npos) << "constants";
+    EXPECT_NE(text.find("\tpop\t%rbx\n\tpop\t%rbp\n"), std::string::npos);
+    expectCompiledAsTheGraph(g, f, lib, 1e-13);
   }
 }
 

@@ -93,9 +93,9 @@ std::string resolveOperands(const std::string& text, const BaseBiases& biases) {
   forEachToken(text, [&](char base, int offset, std::size_t start, std::size_t end) {
     const bool frame = base == kFrame;
     const std::optional<int>& bias = frame ? biases.frame : biases.pool;
-    if (!bias) throw std::logic_error("asm: an operand without its base");
     out.append(text, copied, start - copied);
-    out += std::to_string(offset - *bias) + (frame ? "(%rbp)" : "(%rbx)");
+    if (!bias) out += frame ? std::to_string(offset) + "(%rsp)" : ".LRDc0+" + std::to_string(offset) + "(%rip)";
+    else out += std::to_string(offset - *bias) + (frame ? "(%rbp)" : "(%rbx)");
     copied = end;
   });
   out.append(text, copied, std::string::npos);

@@ -73,7 +73,7 @@ class FunctionPrinter {
     const std::string kept = keepLastKernelGroup();
     for (std::uint32_t i = 0; i < p_.ops.size(); ++i) printOp(i);
     const std::string body = kept + body_.str();
-    const BaseBiases bases = chooseBiases(body);
+    const BaseBiases bases = p_.ops.size() >= kBasesFrom ? chooseBiases(body) : BaseBiases{};
     const int pushes = (bases.frame ? 1 : 0) + (bases.pool ? 1 : 0);
     const int frame = frameBytes(pushes);
     std::vector<std::string> block_registers(kBlockRegisters, kBlockRegisters + blocks_.count());
