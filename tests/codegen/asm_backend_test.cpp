@@ -214,36 +214,19 @@ TEST(AsmBackend, ALargeFunctionReadsItsFrameAndConstantsThroughBaseRegisters) {
   }
 }
 
-// A random function of what the assembly prints: every operation, sin and cos of inputs
-// (at entry) and of computed values (in the body), each new value bounded by
-// v / (1 + |v|); its arguments mostly recent values (chains), sometimes old ones (long
-// lives, spills). Two input blocks; a dense block with zeros and a sparse one.
+// A random function of what the assembly prints (RandomValues): sin and cos of inputs
+// (at entry) and of computed values (in the body). Two input blocks; a dense block with
+// zeros and a sparse one.
 FunctionDefinition randomPrinted(Graph& g, std::uint32_t seed, int operations) {
-  std::mt19937 rng(seed);
-  std::vector<NodeId> pool;
-  for (std::uint32_t i = 0; i < 8; ++i) pool.push_back(g.input(i));
-  auto pick = [&] {
-    const std::size_t n = pool.size();
-    const std::size_t back = rng() % 4 == 0 ? rng() % n : rng() % std::min<std::size_t>(n, 6);
-    return pool[n - 1 - back];
-  };
-  auto bounded = [&](NodeId v) { return g.binary(Op::Div, v, g.binary(Op::Add, g.one(), g.unary(Op::Abs, v))); };
-  for (int k = 0; k < operations; ++k) {
-    const NodeId a = pick(), b = pick();
-    NodeId v;
-    switch (rng() % 9) {
-      case 0: v = g.binary(Op::Add, a, g.unary(Op::Neg, b)); break;
-      case 1: v = g.binary(Op::Sub, g.binary(Op::Mul, a, b), g.constant(0.25 * (k % 7))); break;
-      case 2: v = g.binary(Op::Mul, g.unary(Op::Neg, a), b); break;
-      case 3: v = g.binary(Op::Div, a, g.binary(Op::Add, g.constant(1.5), g.unary(Op::Abs, b))); break;
-      case 4: v = g.unary(Op::Sqrt, g.binary(Op::Add, g.one(), g.binary(Op::Mul, a, a))); break;
-      case 5: v = g.unary(Op::Sin, rng() % 2 ? g.input(rng() % 8) : a); break;
-      case 6: v = g.unary(Op::Cos, rng() % 2 ? g.input(rng() % 8) : g.binary(Op::Add, a, b)); break;
-      case 7: v = g.binary(Op::Add, g.binary(Op::Mul, a, b), g.binary(Op::Mul, pick(), g.unary(Op::Neg, pick()))); break;
-      default: v = g.binary(Op::Sub, g.constant(-0.5), g.binary(Op::Mul, a, g.constant(3.0))); break;
-    }
-    pool.push_back(bounded(v));
-  }
+  std::vector<NodeId> inputs;
+  for (std::uint32_t i = 0; i < 8; ++i) inputs.push_back(g.input(i));
+  RandomValues values(
+      g, seed, inputs, [&](double x) { return g.constant(x); },
+      [&](std::mt19937& rng) { return g.input(static_cast<std::uint32_t>(rng() % 8)); });
+  values.grow(operations);
+  auto pick = [&] { return values.pick(); };
+  std::mt19937& rng = values.rng();
+  const std::vector<NodeId>& pool = values.pool();
   std::vector<NodeId> dense;
   for (std::uint32_t e = 0; e < 24; ++e) dense.push_back(e % 5 == 3 ? g.zero() : pick());
   std::vector<std::uint32_t> row_ptr{0, 2, 2, 5}, col_idx{0, 3, 1, 2, 4};

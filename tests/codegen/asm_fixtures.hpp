@@ -1,6 +1,8 @@
 // Helpers shared by the assembly back end's tests (asm_*_test.cpp).
 #pragma once
 
+#include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -34,5 +36,26 @@ bool closeScaled(double got, double want, double tolerance);
 // Every output of `fn` at `in` within `tolerance` (closeScaled) of the graph's own evaluation.
 void expectGraphValuesAt(const Graph& g, const FunctionDefinition& f, const CompiledFunction& fn,
                          const std::vector<std::vector<double>>& in, double tolerance, const std::string& what);
+
+// Random values of what the assembly prints, each bounded by v / (1 + |v|): every
+// operation, negated operands, sin and cos of inputs and of computed values; their
+// arguments mostly recent values (chains), sometimes old ones (long lives, spills).
+class RandomValues {
+ public:
+  // `constant(x)` makes the constants; `input(rng)` the input a sine or cosine takes.
+  RandomValues(Graph& g, std::uint32_t seed, std::vector<NodeId> start, std::function<NodeId(double)> constant,
+               std::function<NodeId(std::mt19937&)> input);
+  void grow(int operations);
+  NodeId pick();  // a recent value, sometimes an old one
+  const std::vector<NodeId>& pool() const { return pool_; }
+  std::mt19937& rng() { return rng_; }
+
+ private:
+  Graph& g_;
+  std::mt19937 rng_;
+  std::vector<NodeId> pool_;
+  std::function<NodeId(double)> constant_;
+  std::function<NodeId(std::mt19937&)> input_;
+};
 
 }  // namespace robodiff::codegen::testing

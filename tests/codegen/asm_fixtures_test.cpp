@@ -51,4 +51,37 @@ void expectGraphValuesAt(const Graph& g, const FunctionDefinition& f, const Comp
           << what << ", block " << b << ", element " << k << ": " << out[b][k] << " against " << expected[b][k];
 }
 
+RandomValues::RandomValues(Graph& g, std::uint32_t seed, std::vector<NodeId> start,
+                           std::function<NodeId(double)> constant, std::function<NodeId(std::mt19937&)> input)
+    : g_(g), rng_(seed), pool_(std::move(start)), constant_(std::move(constant)), input_(std::move(input)) {}
+
+NodeId RandomValues::pick() {
+  const std::size_t n = pool_.size();
+  const std::size_t back = rng_() % 4 == 0 ? rng_() % n : rng_() % std::min<std::size_t>(n, 6);
+  return pool_[n - 1 - back];
+}
+
+void RandomValues::grow(int operations) {
+  Graph& g = g_;
+  auto neg = [&](NodeId x) { return g.unary(Op::Neg, x); };
+  auto bin = [&](Op op, NodeId x, NodeId y) { return g.binary(op, x, y); };
+  for (int k = 0; k < operations; ++k) {
+    const NodeId a = pick(), b = pick();
+    NodeId v;
+    switch (rng_() % 10) {
+      case 0: v = bin(Op::Add, a, neg(b)); break;
+      case 1: v = bin(Op::Sub, bin(Op::Mul, a, b), constant_(0.25 * (k % 7))); break;
+      case 2: v = bin(Op::Mul, neg(a), b); break;
+      case 3: v = bin(Op::Div, a, bin(Op::Add, constant_(1.5), g.unary(Op::Abs, b))); break;
+      case 4: v = g.unary(Op::Sqrt, bin(Op::Add, g.one(), bin(Op::Mul, a, a))); break;
+      case 5: v = g.unary(Op::Sin, rng_() % 2 ? input_(rng_) : a); break;
+      case 6: v = g.unary(Op::Cos, rng_() % 2 ? input_(rng_) : bin(Op::Add, a, b)); break;
+      case 7: v = bin(Op::Add, bin(Op::Mul, a, b), bin(Op::Mul, pick(), neg(pick()))); break;
+      case 8: v = neg(bin(Op::Mul, a, b)); break;
+      default: v = bin(Op::Sub, constant_(-0.5), bin(Op::Mul, a, constant_(3.0))); break;
+    }
+    pool_.push_back(bin(Op::Div, v, bin(Op::Add, g.one(), g.unary(Op::Abs, v))));
+  }
+}
+
 }  // namespace robodiff::codegen::testing

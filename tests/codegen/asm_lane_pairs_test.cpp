@@ -23,40 +23,19 @@ namespace {
 
 using namespace testing;
 
-// One limb of twinLimbs: the same operations for either side (the generator seeded
+// One limb of twinLimbs: the same operations for either side (RandomValues seeded
 // alike), its inputs 2k + side (the two limbs' inputs adjacent), its constants scaled by
 // side, input 8 read by both.
 std::vector<NodeId> randomLimb(Graph& g, std::uint32_t seed, int operations, std::uint32_t side) {
-  std::mt19937 rng(seed);
-  std::vector<NodeId> pool;
-  for (std::uint32_t k = 0; k < 4; ++k) pool.push_back(g.input(2 * k + side));
-  pool.push_back(g.input(8));
+  std::vector<NodeId> start;
+  for (std::uint32_t k = 0; k < 4; ++k) start.push_back(g.input(2 * k + side));
+  start.push_back(g.input(8));
   const double scale = 1.0 + 0.5 * side;
-  auto c = [&](double x) { return g.constant(x * scale); };
-  auto pick = [&] {
-    const std::size_t n = pool.size();
-    const std::size_t back = rng() % 4 == 0 ? rng() % n : rng() % std::min<std::size_t>(n, 6);
-    return pool[n - 1 - back];
-  };
-  auto bounded = [&](NodeId v) { return g.binary(Op::Div, v, g.binary(Op::Add, g.one(), g.unary(Op::Abs, v))); };
-  for (int k = 0; k < operations; ++k) {
-    const NodeId a = pick(), b = pick();
-    NodeId v;
-    switch (rng() % 10) {
-      case 0: v = g.binary(Op::Add, a, g.unary(Op::Neg, b)); break;
-      case 1: v = g.binary(Op::Sub, g.binary(Op::Mul, a, b), c(0.25 * (k % 7))); break;
-      case 2: v = g.binary(Op::Mul, g.unary(Op::Neg, a), b); break;
-      case 3: v = g.binary(Op::Div, a, g.binary(Op::Add, c(1.5), g.unary(Op::Abs, b))); break;
-      case 4: v = g.unary(Op::Sqrt, g.binary(Op::Add, g.one(), g.binary(Op::Mul, a, a))); break;
-      case 5: v = g.binary(Op::Mul, g.unary(Op::Sin, g.input(2 * (rng() % 4) + side)), a); break;
-      case 6: v = g.unary(Op::Cos, g.binary(Op::Add, a, b)); break;
-      case 7: v = g.binary(Op::Add, g.binary(Op::Mul, a, b), g.binary(Op::Mul, pick(), g.unary(Op::Neg, pick()))); break;
-      case 8: v = g.unary(Op::Neg, g.binary(Op::Mul, a, b)); break;
-      default: v = g.binary(Op::Sub, c(-0.5), g.binary(Op::Mul, a, c(3.0))); break;
-    }
-    pool.push_back(bounded(v));
-  }
-  return pool;
+  RandomValues values(
+      g, seed, start, [&](double x) { return g.constant(x * scale); },
+      [&](std::mt19937& rng) { return g.input(2 * static_cast<std::uint32_t>(rng() % 4) + side); });
+  values.grow(operations);
+  return values.pool();
 }
 
 // Two limbs of the same random shape: outputs each limb's value beside its twin's
@@ -168,7 +147,7 @@ TEST(AsmLanePairs, RandomTwinLimbsComputeWhatTheGraphComputes) {
                             "vfnmadd231pd\t", "pd\t(%rax), %xmm"};
   std::vector<bool> seen(std::size(features), false);
   for (const detail::AsmTarget& target : hostTargets())
-    for (std::uint32_t seed = 1; seed <= 10; ++seed) {
+    for (std::uint32_t seed : {1u, 2u, 3u, 5u, 7u, 9u, 14u, 16u, 18u, 21u}) {  // 333-3,322 operations
       Graph g;
       const FunctionDefinition f = twinLimbs(g, seed, 30 + 25 * static_cast<int>(seed));
       const GeneratedLibrary lib = assembly(g, {f}, target, CodegenOptions{});
