@@ -75,10 +75,6 @@ std::string loadArguments(const EntryKernelInput* lane, std::size_t n,
   return s.str();
 }
 
-}  // namespace
-
-namespace {
-
 using symbolic::Op;
 
 bool isKernel(const Instr& ins) {
@@ -146,12 +142,10 @@ std::optional<std::vector<EntryKernelInput>> entryKernelLanes(const Chunk& chunk
           a->second.first != b->second.first)
         ++twins[{a->second.first, b->second.first}];
     }
-    for (std::uint32_t d : {ins.dst, ins.dst2}) {  // a scalar slot (re)defined
-      if (ins.kind != InstrKind::LoadInput && ins.kind != InstrKind::Compute && ins.kind != InstrKind::SinCos) break;
-      loaded.erase(d);
-      result.erase(d);
-      if (ins.kind != InstrKind::SinCos) break;
-    }
+    auto redefined = [&](std::uint32_t slot) { loaded.erase(slot), result.erase(slot); };
+    if (ins.kind == InstrKind::LoadInput || ins.kind == InstrKind::Compute || ins.kind == InstrKind::SinCos)
+      redefined(ins.dst);
+    if (ins.kind == InstrKind::SinCos) redefined(ins.dst2);
     if (ins.kind == InstrKind::LoadInput) loaded[ins.dst] = {ins.block, ins.index};
     if (isKernel(ins)) {
       const Argument x = arguments.back();
