@@ -46,6 +46,7 @@ class RandomValues {
   RandomValues(Graph& g, std::uint32_t seed, std::vector<NodeId> start, std::function<NodeId(double)> constant,
                std::function<NodeId(std::mt19937&)> input);
   void grow(int operations);
+  void kernelsOfInputsOnly() { computed_kernels_ = false; }  // sin and cos at the entry only
   NodeId pick();  // a recent value, sometimes an old one
   const std::vector<NodeId>& pool() const { return pool_; }
   std::mt19937& rng() { return rng_; }
@@ -56,6 +57,7 @@ class RandomValues {
   std::vector<NodeId> pool_;
   std::function<NodeId(double)> constant_;
   std::function<NodeId(std::mt19937&)> input_;
+  bool computed_kernels_ = true;
 };
 
 }  // namespace robodiff::codegen::testing

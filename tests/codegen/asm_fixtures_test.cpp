@@ -74,8 +74,8 @@ void RandomValues::grow(int operations) {
       case 2: v = bin(Op::Mul, neg(a), b); break;
       case 3: v = bin(Op::Div, a, bin(Op::Add, constant_(1.5), g.unary(Op::Abs, b))); break;
       case 4: v = g.unary(Op::Sqrt, bin(Op::Add, g.one(), bin(Op::Mul, a, a))); break;
-      case 5: v = g.unary(Op::Sin, rng_() % 2 ? input_(rng_) : a); break;
-      case 6: v = g.unary(Op::Cos, rng_() % 2 ? input_(rng_) : bin(Op::Add, a, b)); break;
+      case 5: v = g.unary(Op::Sin, rng_() % 2 || !computed_kernels_ ? input_(rng_) : a); break;
+      case 6: v = g.unary(Op::Cos, rng_() % 2 || !computed_kernels_ ? input_(rng_) : bin(Op::Add, a, b)); break;
       case 7: v = bin(Op::Add, bin(Op::Mul, a, b), bin(Op::Mul, pick(), neg(pick()))); break;
       case 8: v = neg(bin(Op::Mul, a, b)); break;
       default: v = bin(Op::Sub, constant_(-0.5), bin(Op::Mul, a, constant_(3.0))); break;

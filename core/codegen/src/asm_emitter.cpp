@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "asm_program.hpp"
+#include "asm_schedule.hpp"
 #include "lane_pairs.hpp"
 #include "lowering.hpp"
 #include "robodiff/codegen/abi.h"
@@ -183,6 +184,7 @@ std::optional<GeneratedLibrary> generateAssemblyLibrary(const symbolic::Graph& g
     const LoweredFunction& lowered = *whole;
     std::optional<AsmProgram> program = buildAsmProgram(lowered.chunks[0], f);
     if (!program || !asmBlockRegistersSuffice(*program)) return std::nullopt;
+    scheduleForLatency(*program);
     const std::string prefix = "rd_" + f.name;
     code << "/* " << f.name << ": " << lowered.operations << " operations */\n"
          << printAsmFunction(*program, prefix + "_eval", target, constants) << batchLoop(f, prefix);

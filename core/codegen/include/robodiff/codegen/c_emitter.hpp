@@ -20,7 +20,7 @@
 namespace robodiff::codegen {
 
 // Changes whenever the generated code changes for the same input (part of cache keys).
-inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.5.1";
+inline constexpr const char* kGeneratorVersion = "robodiff-codegen 0.5.2";
 
 // Functions of at least this many operations compute their values output by output,
 // not in the trace's order (src/emission_order.hpp). Measured (docs/code-generation.md):
