@@ -218,11 +218,7 @@ TEST(AsmBackend, ALargeFunctionReadsItsFrameAndConstantsThroughBaseRegisters) {
 // (at entry) and of computed values (in the body). Two input blocks; a dense block with
 // zeros and a sparse one.
 FunctionDefinition randomPrinted(Graph& g, std::uint32_t seed, int operations) {
-  std::vector<NodeId> inputs;
-  for (std::uint32_t i = 0; i < 8; ++i) inputs.push_back(g.input(i));
-  RandomValues values(
-      g, seed, inputs, [&](double x) { return g.constant(x); },
-      [&](std::mt19937& rng) { return g.input(static_cast<std::uint32_t>(rng() % 8)); });
+  RandomValues values = randomOverInputs(g, seed, 8);
   values.grow(operations);
   auto pick = [&] { return values.pick(); };
   std::mt19937& rng = values.rng();

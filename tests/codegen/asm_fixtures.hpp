@@ -60,4 +60,8 @@ class RandomValues {
   bool computed_kernels_ = true;
 };
 
+// RandomValues starting from inputs 0 .. inputs-1 (one block), sines and cosines of
+// those, the constants as they are.
+RandomValues randomOverInputs(Graph& g, std::uint32_t seed, std::uint32_t inputs);
+
 }  // namespace robodiff::codegen::testing

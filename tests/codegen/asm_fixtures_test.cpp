@@ -84,4 +84,12 @@ void RandomValues::grow(int operations) {
   }
 }
 
+RandomValues randomOverInputs(Graph& g, std::uint32_t seed, std::uint32_t inputs) {
+  std::vector<NodeId> start;
+  for (std::uint32_t i = 0; i < inputs; ++i) start.push_back(g.input(i));
+  return RandomValues(
+      g, seed, start, [&g](double x) { return g.constant(x); },
+      [&g, inputs](std::mt19937& rng) { return g.input(static_cast<std::uint32_t>(rng() % inputs)); });
+}
+
 }  // namespace robodiff::codegen::testing

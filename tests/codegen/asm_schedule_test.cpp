@@ -178,11 +178,7 @@ AsmProgram programOf(const Graph& g, const FunctionDefinition& f) {
 // Random chains of every operation the assembly prints, sin and cos of inputs only (at
 // the entry), outputs of recent and old values.
 FunctionDefinition randomChains(Graph& g, std::uint32_t seed, int operations) {
-  std::vector<NodeId> inputs;
-  for (std::uint32_t i = 0; i < 6; ++i) inputs.push_back(g.input(i));
-  RandomValues values(
-      g, seed, inputs, [&](double x) { return g.constant(x); },
-      [&](std::mt19937& rng) { return g.input(static_cast<std::uint32_t>(rng() % 6)); });
+  RandomValues values = randomOverInputs(g, seed, 6);
   values.kernelsOfInputsOnly();
   values.grow(operations);
   std::vector<NodeId> out;
