@@ -16,7 +16,7 @@ namespace {
 enum class Pipe : std::uint8_t { Multiply, Add, Any, Store };
 constexpr int kMultiplyPipes = 2, kAddPipes = 2, kIssueWidth = 4;
 // How far ahead of the first operation not yet placed the schedule takes one: measured,
-// 32 beat 16, 40, 48 and no bound (docs/code-generation.md).
+// 32 beat 16, 40, 48 and no bound (docs/assembly-backend.md, "Order").
 constexpr std::uint32_t kWindow = 32;
 
 Pipe pipeOf(MCode code) {

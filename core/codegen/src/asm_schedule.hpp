@@ -1,4 +1,4 @@
-// The assembly's operations reordered for a short critical path (docs/code-generation.md):
+// The assembly's operations reordered for a short critical path (docs/assembly-backend.md):
 // a list schedule on a model of the core's pipes, the operation with the longest chain
 // of latencies to the function's end first among those ready.
 #pragma once
