@@ -92,7 +92,7 @@ class DdsCallerTest : public testing::DdsTest {
   }
 
   static inline testing::TestKeystore* keys_ = nullptr;
-  const std::uint32_t domain_ = testing::freshSecureDomain(100);
+  const std::uint32_t domain_ = testing::freshSecureDomain();
 };
 
 TEST_F(DdsCallerTest, KeystoreGrantsEachIdentityItsOwnPartition) {

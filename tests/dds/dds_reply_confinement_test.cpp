@@ -74,7 +74,7 @@ class DdsReplyConfinementTest : public testing::DdsTest {
   }
 
   static inline testing::TestKeystore* keys_ = nullptr;
-  const std::uint32_t domain_ = testing::freshSecureDomain(150);
+  const std::uint32_t domain_ = testing::freshSecureDomain();
 };
 
 TEST_F(DdsReplyConfinementTest, KeystoreGrantsRepliesOnlyInTheCallersPartition) {

@@ -219,7 +219,7 @@ class DdsRoguePeerTest : public testing::DdsTest {
   }
 
   static inline RogueKeystores* keys_ = nullptr;
-  const std::uint32_t domain_ = testing::freshSecureDomain(60);
+  const std::uint32_t domain_ = testing::freshSecureDomain();
   testing::TempDir served_dir_;
   const fs::path served_ = served_dir_ / "served";  // the server's record (CallerEchoService)
 };

@@ -179,11 +179,9 @@ struct TestKeystore {
 };
 
 // A domain per test (a process's participants of one domain share one security setup),
-// `offset` keeping the suites of this binary apart.
-inline std::uint32_t freshSecureDomain(int offset) {
-  static int next = 0;
-  return static_cast<std::uint32_t>(1 + (getpid() + offset + 37 * ++next) % 200);
-}
+// claimed like testDomain's (support/dds_domain.hpp): no other running test process
+// uses it, so an open participant there meets this test's participants only.
+inline std::uint32_t freshSecureDomain() { return claimDdsDomain(1, 200); }
 
 // A reader of the reply topic (reply = true) or a writer of the request topic on the
 // participant of `endpoints`, in `partitions` (none: the default partition), with the

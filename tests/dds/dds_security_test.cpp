@@ -57,7 +57,7 @@ class DdsSecurityTest : public testing::DdsTest {
   }
 
   static inline Keystores* keys_ = nullptr;
-  const std::uint32_t domain_ = testing::freshSecureDomain(0);
+  const std::uint32_t domain_ = testing::freshSecureDomain();
 };
 
 TEST_F(DdsSecurityTest, AuthenticatedClientIsServed) {
