@@ -37,6 +37,12 @@ class ProgramBuilder {
       p_.homes.push_back(h);
     }
   }
+  std::uint32_t zero() {
+    detail::ValueHome h;
+    h.kind = detail::ValueHome::Kind::Constant;
+    p_.homes.push_back(h);
+    return static_cast<std::uint32_t>(p_.homes.size() - 1);
+  }
   std::uint32_t op(MCode code, std::uint32_t a, std::uint32_t b = kNoValue, std::uint32_t c = kNoValue) {
     MOp m;
     m.code = code;
@@ -151,6 +157,25 @@ TEST(AsmSchedule, AnOutputGroupIsPackedJustBeforeItsStore) {
     EXPECT_EQ(after.ops[n - 4 + k].code, tail[k]) << "the group's packing, then its store, last";
 }
 
+// A group of four cleared whole, then values stored into it: the zeros must stay first.
+TEST(AsmSchedule, AGroupClearedWholeStaysBeforeTheValuesStoredIntoIt) {
+  ProgramBuilder b(2);
+  const std::uint32_t zero = b.zero();
+  std::uint32_t chain = b.op(MCode::Mul, 0, 1);
+  for (int k = 0; k < 10; ++k) chain = b.op(MCode::Fma, chain, 1, 0);
+  b.store(MCode::Store4, zero, 0);  // elements 0..3
+  b.store(MCode::Store, 1, 2);      // an input, ready at once
+  b.store(MCode::Store, chain, 1);
+  const AsmProgram before = b.program();
+  AsmProgram after = before;
+  ASSERT_TRUE(detail::scheduleForLatency(after));
+  expectAReorderingOf(before, after);
+  std::vector<std::uint32_t> stored;
+  for (const MOp& op : after.ops)
+    if (op.code == MCode::Store || op.code == MCode::Store4) stored.push_back(op.index);
+  EXPECT_EQ(stored, (std::vector<std::uint32_t>{0, 2, 1})) << "the group's zeros, then the input, then the chain";
+}
+
 TEST(AsmSchedule, AProgramWithSinCosRegionsInItsBodyKeepsItsOrder) {
   ProgramBuilder b(1);
   std::uint32_t chain = b.op(MCode::Mul, 0, 0);
@@ -176,14 +201,15 @@ AsmProgram programOf(const Graph& g, const FunctionDefinition& f) {
 }
 
 // Random chains of every operation the assembly prints, sin and cos of inputs only (at
-// the entry), outputs of recent and old values.
+// the entry), outputs of recent and old values and zeros among them (groups of four
+// cleared whole, then their values stored).
 FunctionDefinition randomChains(Graph& g, std::uint32_t seed, int operations) {
   RandomValues values = randomOverInputs(g, seed, 6);
   values.kernelsOfInputsOnly();
   values.grow(operations);
   std::vector<NodeId> out;
-  for (std::uint32_t e = 0; e < 10; ++e) out.push_back(values.pick());
-  return FunctionDefinition{"chains" + std::to_string(seed), {{"x", 6}}, {OutputBlock::dense("y", 10, 1, out)}};
+  for (std::uint32_t e = 0; e < 12; ++e) out.push_back(e % 3 == 1 ? g.zero() : values.pick());
+  return FunctionDefinition{"chains" + std::to_string(seed), {{"x", 6}}, {OutputBlock::dense("y", 12, 1, out)}};
 }
 
 TEST(AsmSchedule, ReorderedFunctionsComputeWhatTheGraphComputes) {

@@ -124,6 +124,9 @@ class ListScheduler {
   }
 
   // Units whose operands are ready by `cycle` become candidates; stores go at once.
+  // Stores of no computed value (zeros, inputs) go at cycle 0 in the program's order,
+  // before any computed value is ready: a group of four cleared whole stays before the
+  // values stored into it.
   void admitReady(int cycle, std::vector<std::uint32_t>& out) {
     while (!pending_.empty() && pending_.top().first <= cycle) {
       const std::uint32_t u = pending_.top().second;
